@@ -1,0 +1,226 @@
+/*
+ * vsplat — image-aligned sheet-buffer splatting without the blur
+ * (Mueller, Möller, Crawfis, IEEE Visualization 1999), public C API.
+ *
+ * Pattern: opaque handles with create/release, a settings struct filled with
+ * defaults by vs_settings_init(), every call returns a vs_status, and the
+ * context keeps a human-readable last-error message.  The library never prints.
+ */
+#ifndef VSPLAT_H
+#define VSPLAT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define VS_VERSION_MAJOR 0
+#define VS_VERSION_MINOR 1
+#define VS_VERSION_PATCH 0
+#define VS_VERSION_STRING "0.1.0"
+
+/* Stable status codes: values never change meaning. */
+typedef enum vs_status {
+    VS_OK = 0,
+    VS_ERR_INVALID_ARGUMENT = 1, /* NULL or inconsistent argument, bad setting */
+    VS_ERR_IO = 2,               /* file cannot be opened, read or written */
+    VS_ERR_FORMAT = 3,           /* file is truncated, malformed or unsupported */
+    VS_ERR_OUT_OF_MEMORY = 4,
+    VS_ERR_TOO_LARGE = 5,        /* sizes overflow or exceed VS_MAX_* limits */
+    VS_ERR_UNSUPPORTED = 6,      /* valid request this build cannot serve */
+    VS_ERR_CANCELLED = 7,        /* the progress callback asked to stop */
+    VS_ERR_INTERNAL = 8
+} vs_status;
+
+typedef enum vs_type { VS_U8 = 0, VS_I16 = 1, VS_U16 = 2, VS_F32 = 3 } vs_type;
+
+typedef enum vs_pipeline {
+    VS_PIPELINE_PRE = 0,        /* classify + shade voxels, splat RGBA          */
+    VS_PIPELINE_POST_CD = 1,    /* splat density, (FH)D central differences     */
+    VS_PIPELINE_POST_GS = 2,    /* splat density + gradient splats (FH')        */
+    VS_PIPELINE_POST_ALPHA = 3, /* pre-shaded colour, alpha classified on sheet */
+    VS_PIPELINE_RAYCAST = 4     /* reference ray caster                         */
+} vs_pipeline;
+
+typedef enum vs_isa {
+    VS_ISA_AUTO = 0, VS_ISA_SCALAR = 1, VS_ISA_SSE4 = 2, VS_ISA_AVX2 = 3, VS_ISA_AVX512 = 4
+} vs_isa;
+
+/* Limits that guard against absurd input (allocation never exceeds them). */
+#define VS_MAX_DIM 16384
+#define VS_MAX_VOXELS ((uint64_t)1 << 32)
+#define VS_MAX_IMAGE_DIM 16384
+
+typedef struct vs_context vs_context;
+typedef struct vs_volume vs_volume;
+
+/* One control point of a piecewise-linear 1-D transfer function: value in
+ * data units -> colour (0..1) and opacity per unit length (one voxel). */
+typedef struct vs_tf_point {
+    double value;
+    float r, g, b, a;
+} vs_tf_point;
+
+/* Progress callback: fraction in [0,1]; return non-zero to cancel.
+ * Always called on the thread that called vs_render(). */
+typedef int (*vs_progress_fn)(void *user, double fraction);
+
+typedef struct vs_settings {
+    vs_pipeline pipeline;
+    int width, height;         /* image size in pixels (default 512x512)        */
+    double azimuth, elevation; /* degrees; view 0,0 looks along +y, +z up        */
+    double zoom;               /* largest physical extent spans zoom*width       */
+    int has_center;            /* use center[] (voxel coordinates) if non-zero  */
+    double center[3];
+    double perspective_fov;    /* reserved: 0 = orthographic (only mode today)   */
+
+    /* kernel and sheets */
+    double slab;               /* sheet thickness Δs in voxel units (default 1) */
+    double kernel_radius;      /* radial extent of the Gaussian (default 2)     */
+    int footprint_resolution;  /* table entries per kernel-radius unit          */
+    int depth_resolution;      /* depth-integral table entries per voxel unit    */
+    int seam;                  /* seam layer width in voxels, -1 = auto (ceil R) */
+
+    /* classification: iso-range with ramp, or a piecewise-linear function */
+    int has_iso;               /* 0: choose iso from the histogram (Otsu)       */
+    double iso_lo, iso_hi;     /* iso_hi = +INFINITY for an open range          */
+    double ramp;               /* opacity ramp half-width W, <0 = 2% of range   */
+    float iso_opacity;         /* opacity inside the range (default 1)          */
+    float material[3];         /* material colour (default white)               */
+    const vs_tf_point *tf;     /* if tf_count > 0 it replaces the iso-range     */
+    int tf_count;
+
+    /* lighting: one directional light, Phong */
+    int headlight;             /* 1: light comes from the eye (default)         */
+    double light_dir[3];       /* direction *towards* the light, world space    */
+    double ambient, diffuse, specular, shininess;
+    float background[4];       /* RGBA, default transparent black               */
+
+    /* leaving out what the scene does not need */
+    int occlusion;             /* early splat elimination (default 1)           */
+    double occlusion_threshold;/* opacity above which a pixel is occluded       */
+    int tile_counters;         /* shade only touched regions (default 1)        */
+    int tile_size;             /* parallel tile edge in pixels (default 64)     */
+    int exact_normals;         /* 0: Clyne-Dennis LUT normals and shading table */
+    int normal_lut_size;       /* angle bins of the shading table (default 256) */
+
+    /* execution */
+    int threads;               /* 0 = one per physical core                      */
+    vs_isa isa;                /* cap on the instruction set                     */
+    int pin;                   /* bind workers to cores with hwloc (default 1)   */
+
+    /* reference ray caster */
+    double ray_step;           /* in voxel units (default 0.1)                   */
+    int ray_trilinear;         /* 0: exact Gaussian reconstruction              */
+    int ray_analytic;          /* 1: use the scene's analytic function if any    */
+
+    vs_progress_fn progress;
+    void *progress_user;
+} vs_settings;
+
+typedef struct vs_stage_times {
+    double setup, rasterize, gradient, shade, composite;
+} vs_stage_times;
+
+typedef struct vs_stats {
+    const char *pipeline;      /* static strings, valid forever                  */
+    const char *isa;
+    int threads;
+    int width, height;
+    uint64_t voxels_total;     /* voxels in the volume                           */
+    uint64_t voxels_relevant;  /* in range plus seam                             */
+    uint64_t voxels_splatted;  /* voxel-sheet rasterizations performed           */
+    uint64_t voxels_culled;    /* voxel-sheet rasterizations skipped (occlusion) */
+    uint64_t sheets;           /* sheets composited (summed over tiles)          */
+    uint64_t tiles_total;      /* tile-sheets considered                         */
+    uint64_t tiles_shaded;     /* tile-sheets gradient-estimated and shaded      */
+    double ms_total;           /* wall clock of vs_render                        */
+    vs_stage_times ms_stage;   /* summed over threads                            */
+    double ms_relevant;        /* building the relevant-voxel list (if rebuilt)  */
+    double iso_lo, iso_hi, ramp; /* classification actually used                 */
+    int pin_warning;           /* 1 if binding workers to cores failed           */
+} vs_stats;
+
+/* A rendered image: straight RGBA float, row 0 at the top. */
+typedef struct vs_image {
+    int width, height;
+    float *rgba; /* width*height*4, owned by the caller: free with vs_image_free */
+} vs_image;
+
+/* ---- context ---- */
+vs_status vs_context_create(vs_context **out);
+void vs_context_release(vs_context *ctx);
+const char *vs_last_error(const vs_context *ctx); /* never NULL */
+const char *vs_status_string(vs_status s);
+const char *vs_version(void);
+
+void vs_settings_init(vs_settings *s);
+const char *vs_pipeline_name(vs_pipeline p);
+vs_status vs_pipeline_parse(const char *name, vs_pipeline *out);
+const char *vs_isa_name(vs_isa isa);
+vs_status vs_isa_parse(const char *name, vs_isa *out);
+/* best ISA this CPU and OS support */
+vs_isa vs_isa_detect(void);
+
+/* ---- volumes ---- */
+typedef enum vs_endian { VS_ENDIAN_LITTLE = 0, VS_ENDIAN_BIG = 1 } vs_endian;
+
+/* Options for headerless raw input (and spacing override for any format). */
+typedef struct vs_load_options {
+    int raw;                  /* 1: treat the file as headerless raw            */
+    int dims[3];
+    vs_type type;
+    vs_endian endian;
+    int has_spacing;
+    double spacing[3];
+} vs_load_options;
+void vs_load_options_init(vs_load_options *o);
+
+/* Formats: .nii/.nii.gz (nifticlib), .nrrd/.nhdr (Teem), .tif/.tiff stacks,
+ * folders and .tar of PNG slices (OpenImageIO), .den (VolPack), raw (+gzip). */
+vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
+                         vs_volume **out);
+/* Synthetic scenes: cube, sphere, ml[:N], head, cell (optionally NAME:N). */
+vs_status vs_volume_scene(vs_context *ctx, const char *spec, vs_volume **out);
+vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
+                           const double spacing[3], vs_volume **out);
+void vs_volume_release(vs_volume *v);
+void *vs_volume_data(vs_volume *v); /* x fastest, then y, then z */
+void vs_volume_dims(const vs_volume *v, int dims[3]);
+void vs_volume_spacing(const vs_volume *v, double spacing[3]);
+vs_type vs_volume_type(const vs_volume *v);
+const char *vs_type_name(vs_type t);
+/* Recompute the value range after writing into vs_volume_data(). */
+void vs_volume_update_range(vs_volume *v);
+void vs_volume_range(const vs_volume *v, double *lo, double *hi);
+/* Otsu threshold of the value histogram: a default iso-value. */
+double vs_volume_default_iso(const vs_volume *v);
+int vs_volume_has_analytic(const vs_volume *v);
+
+/* ---- rendering ---- */
+vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s,
+                    vs_image *out, vs_stats *stats);
+void vs_image_free(vs_image *img);
+
+/* ---- images (OpenImageIO) ---- */
+/* Format from the extension: .png (8-bit, or 16-bit with bits=16), .exr
+ * (float), .tif/.tiff.  Written to a temporary name and renamed. */
+vs_status vs_image_write(vs_context *ctx, const char *path, const vs_image *img, int bits);
+vs_status vs_image_read(vs_context *ctx, const char *path, vs_image *out);
+
+typedef struct vs_image_diff {
+    double rmse, psnr, ssim, max_abs;
+} vs_image_diff;
+/* Over all four channels; psnr is +INFINITY for identical images. */
+vs_status vs_image_compare(vs_context *ctx, const vs_image *a, const vs_image *b,
+                           vs_image_diff *out);
+
+/* Stats as JSON (the DESIGN.md contract) into buf; returns bytes needed. */
+size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

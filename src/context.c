@@ -1,0 +1,152 @@
+/* Context lifetime, error reporting, settings defaults and names. */
+#include "internal.h"
+#include "pool.h"
+#include "relevant.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+vs_status vs_context_create(vs_context **out)
+{
+    if (!out) return VS_ERR_INVALID_ARGUMENT;
+    vs_context *c = calloc(1, sizeof *c);
+    if (!c) return VS_ERR_OUT_OF_MEMORY;
+    *out = c;
+    return VS_OK;
+}
+
+void vs_context_release(vs_context *ctx)
+{
+    if (!ctx) return;
+    vs_pool_destroy(ctx->pool);
+    vs_relevant_cache_free(ctx->relevant);
+    free(ctx);
+}
+
+const char *vs_last_error(const vs_context *ctx)
+{
+    if (!ctx) return "no context";
+    return ctx->error;
+}
+
+vs_status vs_set_error(vs_context *ctx, vs_status st, const char *fmt, ...)
+{
+    if (ctx) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(ctx->error, sizeof ctx->error, fmt, ap);
+        va_end(ap);
+    }
+    return st;
+}
+
+const char *vs_status_string(vs_status s)
+{
+    switch (s) {
+    case VS_OK: return "ok";
+    case VS_ERR_INVALID_ARGUMENT: return "invalid argument";
+    case VS_ERR_IO: return "i/o error";
+    case VS_ERR_FORMAT: return "malformed input";
+    case VS_ERR_OUT_OF_MEMORY: return "out of memory";
+    case VS_ERR_TOO_LARGE: return "too large";
+    case VS_ERR_UNSUPPORTED: return "unsupported";
+    case VS_ERR_CANCELLED: return "cancelled";
+    case VS_ERR_INTERNAL: return "internal error";
+    }
+    return "unknown status";
+}
+
+const char *vs_version(void) { return VS_VERSION_STRING; }
+
+void vs_settings_init(vs_settings *s)
+{
+    if (!s) return;
+    memset(s, 0, sizeof *s);
+    s->pipeline = VS_PIPELINE_POST_CD;
+    s->width = 512;
+    s->height = 512;
+    s->zoom = 0.8;
+    s->slab = 1.0;
+    s->kernel_radius = 2.0;
+    s->footprint_resolution = 256;
+    s->depth_resolution = 256;
+    s->seam = -1;
+    s->iso_hi = INFINITY;
+    s->ramp = -1.0;
+    s->iso_opacity = 1.0f;
+    s->material[0] = s->material[1] = s->material[2] = 1.0f;
+    s->headlight = 1;
+    s->light_dir[2] = 1.0;
+    s->ambient = 0.2;
+    s->diffuse = 0.7;
+    s->specular = 0.3;
+    s->shininess = 20.0;
+    s->occlusion = 1;
+    s->occlusion_threshold = 0.995;
+    s->tile_counters = 1;
+    s->tile_size = 64;
+    s->exact_normals = 0;
+    s->normal_lut_size = 256;
+    s->threads = 0;
+    s->isa = VS_ISA_AUTO;
+    s->pin = 1;
+    s->ray_step = 0.1;
+    s->ray_trilinear = 0;
+    s->ray_analytic = 1;
+}
+
+static const char *const pipeline_names[] = {"pre", "post-cd", "post-gs", "post-alpha", "raycast"};
+
+const char *vs_pipeline_name(vs_pipeline p)
+{
+    if ((int)p < 0 || (int)p > VS_PIPELINE_RAYCAST) return "unknown";
+    return pipeline_names[p];
+}
+
+vs_status vs_pipeline_parse(const char *name, vs_pipeline *out)
+{
+    if (!name || !out) return VS_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i <= VS_PIPELINE_RAYCAST; i++)
+        if (!strcmp(name, pipeline_names[i])) {
+            *out = (vs_pipeline)i;
+            return VS_OK;
+        }
+    return VS_ERR_INVALID_ARGUMENT;
+}
+
+static const char *const isa_names[] = {"auto", "scalar", "sse4", "avx2", "avx512"};
+
+const char *vs_isa_name(vs_isa isa)
+{
+    if ((int)isa < 0 || (int)isa > VS_ISA_AVX512) return "unknown";
+    return isa_names[isa];
+}
+
+vs_status vs_isa_parse(const char *name, vs_isa *out)
+{
+    if (!name || !out) return VS_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i <= VS_ISA_AVX512; i++)
+        if (!strcmp(name, isa_names[i])) {
+            *out = (vs_isa)i;
+            return VS_OK;
+        }
+    return VS_ERR_INVALID_ARGUMENT;
+}
+
+double vs_now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+void vs_image_free(vs_image *img)
+{
+    if (!img) return;
+    free(img->rgba);
+    img->rgba = NULL;
+    img->width = img->height = 0;
+}

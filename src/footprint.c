@@ -1,0 +1,87 @@
+/* Kernel geometry and pre-integrated tables for one frame (see footprint.h). */
+#include "footprint.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+void vs_footprint_free(vs_footprint *fp)
+{
+    free(fp->exp_table);
+    free(fp->depth_table);
+    fp->exp_table = fp->depth_table = NULL;
+}
+
+vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_camera *cam,
+                             vs_footprint *fp)
+{
+    if (!(s->kernel_radius >= 0.5 && s->kernel_radius <= 8.0))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "kernel radius %g must lie in [0.5, 8]",
+                            s->kernel_radius);
+    if (!(s->slab >= 0.01 && s->slab <= 64.0))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "slab thickness %g must lie in [0.01, 64]", s->slab);
+    if (s->footprint_resolution < 8 || s->footprint_resolution > (1 << 20))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "footprint resolution %d must lie in [8, 2^20]",
+                            s->footprint_resolution);
+    if (s->depth_resolution < 8 || s->depth_resolution > (1 << 16))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "depth resolution %d must lie in [8, 65536]",
+                            s->depth_resolution);
+    fp->a = 2.0 * M_LN2;
+    fp->R = s->kernel_radius;
+    fp->b = vs_kernel_b(fp->R);
+    fp->emax = fp->a * fp->R * fp->R;
+    fp->slab = s->slab;
+    /* Q = a Minv^T Minv (view space, Minv maps view -> index) */
+    double Q[3][3];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            double q = 0;
+            for (int k = 0; k < 3; k++) q += cam->Minv[k][r] * cam->Minv[k][c];
+            Q[r][c] = fp->a * q;
+        }
+    double A = Q[0][0], B = Q[0][1], C = Q[1][1];
+    double det = A * C - B * B;
+    /* s = -Qxx^-1 Qxz */
+    double sx = -(C * Q[0][2] - B * Q[1][2]) / det;
+    double sy = -(-B * Q[0][2] + A * Q[1][2]) / det;
+    fp->kappa = Q[2][2] + Q[0][2] * sx + Q[1][2] * sy;
+    fp->A = (float)A;
+    fp->B = (float)B;
+    fp->C = (float)C;
+    fp->row_k = (float)(C - B * B / A);
+    fp->row_shift = (float)(-B / A);
+    fp->sx = (float)sx;
+    fp->sy = (float)sy;
+    fp->sheared = fabs(sx) > 1e-9 || fabs(sy) > 1e-9;
+    fp->Qzx = Q[2][0];
+    fp->Qzy = Q[2][1];
+    fp->rz = sqrt(fp->emax / fp->kappa);
+    /* footprint extent: the ellipse d^T Qxx d <= emax has half-widths
+     * sqrt(emax * (Qxx^-1)_xx), plus the largest shift within +-rz */
+    fp->rx = sqrt(fp->emax * C / det) + fabs(sx) * fp->rz;
+    fp->ry = sqrt(fp->emax * A / det) + fabs(sy) * fp->rz;
+    if (!isfinite(fp->rx) || !isfinite(fp->ry) || !isfinite(fp->rz) || fp->rx > 1e6 || fp->ry > 1e6)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
+                            "zoom too large: a footprint would span %g pixels", 2 * fp->rx);
+
+    fp->exp_n = s->footprint_resolution;
+    fp->exp_scale = (float)((fp->exp_n - 1) / fp->emax);
+    fp->exp_table = malloc((size_t)(fp->exp_n + 1) * sizeof(float));
+    fp->depth_n = (int)ceil(2.0 * fp->rz * s->depth_resolution) + 2;
+    if (fp->depth_n > (1 << 24)) fp->depth_n = 1 << 24;
+    fp->depth_scale = (float)((fp->depth_n - 1) / (2.0 * fp->rz));
+    fp->depth_table = malloc((size_t)(fp->depth_n + 1) * sizeof(float));
+    if (!fp->exp_table || !fp->depth_table) {
+        vs_footprint_free(fp);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "footprint tables: out of memory");
+    }
+    /* entries 0..exp_n-1 cover [0, emax]; lookups past emax return 0 */
+    for (int i = 0; i < fp->exp_n; i++) fp->exp_table[i] = (float)exp(-(double)i / fp->exp_scale);
+    fp->exp_table[fp->exp_n] = fp->exp_table[fp->exp_n - 1];
+    double sk = sqrt(fp->kappa), base = erf(-sk * fp->rz);
+    for (int i = 0; i <= fp->depth_n; i++) {
+        double z = -fp->rz + i / (double)fp->depth_scale;
+        if (z > fp->rz) z = fp->rz;
+        fp->depth_table[i] = (float)(0.5 * sqrt(M_PI / fp->kappa) * (erf(sk * z) - base));
+    }
+    return VS_OK;
+}

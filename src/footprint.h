@@ -1,0 +1,66 @@
+/* Per-frame kernel geometry in view space and the pre-integrated tables.
+ *
+ * The kernel h(u) = b exp(-a |u|^2) (a = 2 ln 2) lives in voxel-index space
+ * u; the camera maps index to view space linearly (v = M u), so in view space
+ * h(v) = b exp(-v^T Q v) with Q = a Minv^T Minv.  Split Q into the in-sheet
+ * block Qxx (2x2), the coupling Qxz and Qzz.  Then for a fixed depth z the
+ * section is a 2-D Gaussian exp(-(d - s z)^T Qxx (d - s z)) centred at the
+ * shift s z (s = -Qxx^-1 Qxz: non-zero only for anisotropic voxels seen
+ * obliquely) times the depth term exp(-kappa z^2).  A slab [z0, z1) thus
+ * contributes footprint(d - s zbar) * D(z0, z1), D being the integral of the
+ * depth term (a difference of erf values), zbar its centroid. */
+#ifndef VS_FOOTPRINT_H
+#define VS_FOOTPRINT_H
+
+#include "internal.h"
+
+typedef struct vs_footprint {
+    double a;            /* 2 ln 2                                            */
+    double b;            /* kernel normalisation for radius R                  */
+    double R;            /* kernel radius (index units)                        */
+    double emax;         /* a R^2: exponent where the kernel is truncated      */
+    float A, B, C;       /* Qxx = [[A, B], [B, C]] (per pixel^2)               */
+    float row_k;         /* C - B^2/A: exponent per dy^2 of a row's weight     */
+    float row_shift;     /* -B/A: a row's centre moves by row_shift * dy       */
+    float sx, sy;        /* shift per view unit of depth                       */
+    int sheared;         /* s != 0                                             */
+    double kappa;        /* depth exponent per view unit^2                     */
+    double rz;           /* depth half-extent (view units)                     */
+    double rx, ry;       /* footprint half-extent in pixels (incl. shift)      */
+    double slab;         /* sheet thickness (view units)                       */
+    double Qzx, Qzy;     /* coupling terms for the z gradient splat            */
+    /* exp(-t) for t in [0, emax], linear interpolation */
+    int exp_n;
+    float exp_scale;     /* (exp_n - 1) / emax                                 */
+    float *exp_table;    /* exp_n + 1 entries                                  */
+    /* depth integral G(z) = int_{-rz}^{z} exp(-kappa t^2) dt on [-rz, rz]      */
+    int depth_n;
+    float depth_scale;   /* (depth_n - 1) / (2 rz)                             */
+    float *depth_table;  /* depth_n + 1 entries                                */
+} vs_footprint;
+
+vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_camera *cam,
+                             vs_footprint *fp);
+void vs_footprint_free(vs_footprint *fp);
+
+static inline float vs_fp_exp(const vs_footprint *fp, float t)
+{
+    float x = t * fp->exp_scale;
+    if (x >= (float)(fp->exp_n - 1)) return 0.0f; /* truncated */
+    int i = (int)x;
+    float f = x - (float)i;
+    return fp->exp_table[i] + f * (fp->exp_table[i + 1] - fp->exp_table[i]);
+}
+
+/* G(z): integral of the depth term from -rz to z (clamped). */
+static inline float vs_fp_depth(const vs_footprint *fp, float z)
+{
+    float x = (z + (float)fp->rz) * fp->depth_scale;
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= (float)(fp->depth_n - 1)) return fp->depth_table[fp->depth_n - 1];
+    int i = (int)x;
+    float f = x - (float)i;
+    return fp->depth_table[i] + f * (fp->depth_table[i + 1] - fp->depth_table[i]);
+}
+
+#endif

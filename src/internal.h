@@ -1,0 +1,149 @@
+/* Internal interfaces shared by the library's files.  Not installed. */
+#ifndef VS_INTERNAL_H
+#define VS_INTERNAL_H
+
+#include "vsplat.h"
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+
+/* ---- volumes ---- */
+
+/* An analytic scene definition: f and its gradient at a point given in
+ * voxel-index coordinates (continuous; voxel i sits at index i).  Used by the
+ * reference ray caster as ground truth.  `params` points into the volume. */
+typedef struct vs_analytic {
+    double (*f)(const void *params, const double p[3]);
+    void (*grad)(const void *params, const double p[3], double g[3]);
+    double iso;          /* the scene's natural iso-value                    */
+    double params[64];   /* scene parameters, copied with the volume         */
+} vs_analytic;
+
+struct vs_volume {
+    vs_type type;
+    int dims[3];
+    double spacing[3];
+    double vmin, vmax;   /* value range (finite values)                       */
+    void *data;          /* dims[0]*dims[1]*dims[2] elements, x fastest        */
+    int has_analytic;
+    vs_analytic analytic;
+    double default_iso;  /* scene's iso; NAN if none                          */
+    double default_ramp; /* scene's ramp; NAN if none                         */
+};
+
+size_t vs_type_size(vs_type t);
+/* Value of voxel at linear index i as double. */
+static inline double vs_volume_at(const struct vs_volume *v, size_t i)
+{
+    switch (v->type) {
+    case VS_U8: return ((const uint8_t *)v->data)[i];
+    case VS_I16: return ((const int16_t *)v->data)[i];
+    case VS_U16: return ((const uint16_t *)v->data)[i];
+    default: return ((const float *)v->data)[i];
+    }
+}
+/* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
+vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
+                          const double spacing[3], struct vs_volume **out);
+
+/* ---- context ---- */
+struct vs_pool;
+struct vs_relevant_cache;
+struct vs_context {
+    char error[512];
+    struct vs_pool *pool;       /* created lazily, reused across frames        */
+    int pool_threads;
+    int pool_pin;
+    struct vs_relevant_cache *relevant; /* relevant-voxel list, reused          */
+};
+
+/* Set the last-error message (printf-style); returns status for chaining. */
+vs_status vs_set_error(vs_context *ctx, vs_status st, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* ---- camera (DESIGN.md §2) ---- */
+/* World space: physical units (mm), volume centred at the origin, voxel i at
+ * (i - (n-1)/2) * spacing.  View space: x right and y down in pixels, z along
+ * the viewing direction in "view units" (the smallest voxel spacing). */
+typedef struct vs_camera {
+    int width, height;
+    double right[3], up[3], dir[3]; /* world-space unit vectors               */
+    double px_per_mm;               /* pixels per world unit                  */
+    double z_per_mm;                /* view units per world unit              */
+    double center_world[3];         /* world point at the image centre        */
+    /* index -> view: v = M * idx + t  (x,y pixels, z view units)            */
+    double M[3][3], t[3];
+    double Minv[3][3];              /* view -> index (for ray casting)        */
+    double unit_mm;                 /* one view unit in mm (smallest spacing) */
+} vs_camera;
+
+vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
+                          const vs_settings *s, vs_camera *cam);
+void vs_camera_index_to_view(const vs_camera *cam, const double idx[3], double v[3]);
+void vs_camera_view_to_index(const vs_camera *cam, const double v[3], double idx[3]);
+
+/* ---- classification (transfer function) ---- */
+#define VS_TF_TABLE 4096
+typedef struct vs_classify {
+    double lo, hi, ramp;   /* iso-range in use (hi may be +INF)               */
+    double vmin, vmax;     /* domain of the table                             */
+    double scale;          /* (VS_TF_TABLE-1)/(vmax-vmin)                     */
+    float color[VS_TF_TABLE][3];
+    float alpha[VS_TF_TABLE]; /* opacity per view unit                        */
+    double alpha_lo, alpha_hi; /* values outside which alpha is 0: relevant range */
+    int use_points;        /* piecewise-linear function given                 */
+} vs_classify;
+
+/* Build from settings and the volume (iso from histogram if not given). */
+vs_status vs_classify_setup(vs_context *ctx, const struct vs_volume *vol,
+                            const vs_settings *s, vs_classify *c);
+/* Exact evaluation (no table): opacity per unit length and colour. */
+void vs_classify_eval(const vs_classify *c, const vs_settings *s, double value,
+                      float rgb[3], float *alpha);
+/* Table lookup (linear interpolation; clamps outside the domain). */
+static inline float vs_classify_alpha(const vs_classify *c, float value)
+{
+    float x = (float)((value - c->vmin) * c->scale);
+    if (!(x > 0.0f)) x = 0.0f; /* also catches NaN */
+    if (x >= (float)(VS_TF_TABLE - 1)) return c->alpha[VS_TF_TABLE - 1];
+    int i = (int)x;
+    float f = x - (float)i;
+    return c->alpha[i] + f * (c->alpha[i + 1] - c->alpha[i]);
+}
+/* Opacity for a sample of length `len` view units: 1-(1-a)^len. */
+static inline double vs_opacity_correct(double a, double len)
+{
+    if (a <= 0.0) return 0.0;
+    if (a >= 1.0) return 1.0;
+    return 1.0 - pow(1.0 - a, len);
+}
+
+/* ---- lighting (shared by every pipeline and the ray caster) ---- */
+/* Normals and light live in the eye frame: e1 = right, e2 = down (-up),
+ * e3 = viewing direction; orthonormal in world units. */
+typedef struct vs_light {
+    double L[3];   /* unit vector towards the light, eye frame              */
+    double H[3];   /* Blinn half vector between L and the eye                */
+    double ka, kd, ks, n;
+} vs_light;
+void vs_light_setup(const vs_settings *s, const vs_camera *cam, vs_light *l);
+/* Phong terms for a normal in the eye frame (right, down, forward; any
+ * length).  Two-sided: a normal facing away from the eye is flipped.  A zero
+ * normal is treated as facing the eye, so homogeneous regions are defined.
+ * colour = material * (*diffuse) + (*specular). */
+void vs_light_eval(const vs_light *l, const double n[3], double *diffuse, double *specular);
+
+/* ---- kernel (Gaussian h(r) = b 2^(-2 r^2), truncated at radius R) ---- */
+double vs_kernel_b(double radius);  /* normalizing constant */
+
+/* ---- ray caster ---- */
+vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol,
+                            const vs_settings *s, vs_image *out, vs_stats *st);
+
+/* ---- timing ---- */
+double vs_now_ms(void);
+
+#endif

@@ -1,0 +1,43 @@
+/* Normalisation and shading through lookup tables (paper §4.2): Clyne-Dennis
+ * spherical angles (eqs. 10-11) from a gradient quantised to signed bytes,
+ * and a shading table indexed by the two angles.  No square root, no pow. */
+#ifndef VS_NORMALS_H
+#define VS_NORMALS_H
+
+#include "internal.h"
+
+typedef struct vs_shade_lut {
+    int nl, np;              /* longitude bins (lambda), latitude bins (phi) */
+    uint16_t *lambda_bin;    /* [255*255]: (gy+127, gx+127) -> lambda bin     */
+    uint8_t *radius;         /* [255*255]: sqrt(gx^2+gy^2) rounded, 0..180   */
+    uint16_t *phi_bin;       /* [255*181]: (gz+127, r) -> phi bin             */
+    float *diffuse;          /* [np*nl]                                        */
+    float *specular;         /* [np*nl]                                        */
+} vs_shade_lut;
+
+vs_status vs_shade_lut_setup(vs_context *ctx, int nl, const vs_light *light, vs_shade_lut *lut);
+void vs_shade_lut_free(vs_shade_lut *lut);
+
+/* Shade a gradient (eye frame, any scale) through the tables. */
+static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy, float gz,
+                                     float *diffuse, float *specular)
+{
+    float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
+    float m = ax > ay ? ax : ay;
+    if (az > m) m = az;
+    int ix = 0, iy = 0, iz = 0;
+    if (m > 0.0f) { /* quantise to signed bytes by the largest component */
+        float k = 127.0f / m;
+        ix = (int)lrintf(gx * k);
+        iy = (int)lrintf(gy * k);
+        iz = (int)lrintf(gz * k);
+    }
+    if (ix == 0 && iy == 0 && iz == 0) iz = -127; /* zero gradient: faces the eye */
+    int li = lut->lambda_bin[(iy + 127) * 255 + (ix + 127)];
+    int r = lut->radius[(iy + 127) * 255 + (ix + 127)];
+    int pi = lut->phi_bin[(iz + 127) * 181 + r];
+    *diffuse = lut->diffuse[pi * lut->nl + li];
+    *specular = lut->specular[pi * lut->nl + li];
+}
+
+#endif

@@ -1,0 +1,177 @@
+/* Building the relevant-voxel list: an in-range mask, dilated by the seam
+ * width with separable running maxima, then compacted in k, j, i order. */
+#include "relevant.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void vs_relevant_cache_free(vs_relevant_cache *rc)
+{
+    if (!rc) return;
+    free(rc->voxels);
+    free(rc->grad);
+    free(rc);
+}
+
+static int in_alpha_range(const vs_classify *c, double v)
+{
+    /* opacity is non-zero strictly inside (alpha_lo, alpha_hi) for ramps and
+     * on the closed range for hard thresholds */
+    if (!isfinite(v)) return 0;
+    if (c->ramp > 0 || c->use_points) return v > c->alpha_lo && v < c->alpha_hi;
+    return v >= c->alpha_lo && v <= c->alpha_hi;
+}
+
+/* Dilate a byte mask along one axis by r (box), in place with a line buffer. */
+static void dilate_axis(uint8_t *m, const int d[3], int axis, int r, uint8_t *line)
+{
+    size_t stride[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
+    int n = d[axis];
+    int o1 = axis == 0 ? 1 : 0, o2 = axis == 2 ? 1 : 2;
+    for (int b = 0; b < d[o2]; b++)
+        for (int a = 0; a < d[o1]; a++) {
+            uint8_t *base = m + a * stride[o1] + b * stride[o2];
+            size_t st = stride[axis];
+            for (int x = 0; x < n; x++) line[x] = base[x * st];
+            /* distance to the nearest set voxel, forward and backward */
+            int last = -1000000;
+            for (int x = 0; x < n; x++) {
+                if (line[x] & 1) last = x;
+                if (x - last <= r) base[x * st] = 1;
+            }
+            last = 1000000;
+            for (int x = n - 1; x >= 0; x--) {
+                if (line[x] & 1) last = x;
+                if (last - x <= r) base[x * st] = 1;
+            }
+        }
+}
+
+static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c, int seam,
+                       int with_grad, vs_relevant_cache *rc)
+{
+    const int *d = vol->dims;
+    size_t n = (size_t)d[0] * d[1] * d[2];
+    uint8_t *mask = malloc(n);
+    int maxd = d[0] > d[1] ? d[0] : d[1];
+    if (d[2] > maxd) maxd = d[2];
+    uint8_t *line = malloc((size_t)maxd);
+    if (!mask || !line) {
+        free(mask);
+        free(line);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    }
+    /* integer volumes: classify each possible value once */
+    if (vol->type == VS_U8) {
+        uint8_t lut[256];
+        for (int v = 0; v < 256; v++) lut[v] = (uint8_t)in_alpha_range(c, v);
+        const uint8_t *p = vol->data;
+        for (size_t i = 0; i < n; i++) mask[i] = lut[p[i]];
+    } else if (vol->type == VS_U16 || vol->type == VS_I16) {
+        uint8_t *lut = malloc(65536);
+        if (!lut) {
+            free(mask);
+            free(line);
+            return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+        }
+        int off = vol->type == VS_I16 ? 32768 : 0;
+        for (int v = 0; v < 65536; v++) lut[v] = (uint8_t)in_alpha_range(c, v - off);
+        if (vol->type == VS_U16) {
+            const uint16_t *p = vol->data;
+            for (size_t i = 0; i < n; i++) mask[i] = lut[p[i]];
+        } else {
+            const int16_t *p = vol->data;
+            for (size_t i = 0; i < n; i++) mask[i] = lut[p[i] + 32768];
+        }
+        free(lut);
+    } else {
+        const float *p = vol->data;
+        for (size_t i = 0; i < n; i++) mask[i] = (uint8_t)in_alpha_range(c, p[i]);
+    }
+    if (seam > 0) {
+        /* a box dilation is separable: one running pass per axis */
+        for (int axis = 0; axis < 3; axis++) dilate_axis(mask, d, axis, seam, line);
+    }
+    free(line);
+    size_t count = 0;
+    for (size_t i = 0; i < n; i++) count += mask[i] != 0;
+    vs_voxel *vox = malloc((count ? count : 1) * sizeof *vox);
+    float *grad = with_grad ? malloc((count ? count : 1) * 3 * sizeof(float)) : NULL;
+    if (!vox || (with_grad && !grad)) {
+        free(mask);
+        free(vox);
+        free(grad);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
+    }
+    size_t o = 0, idx = 0;
+    for (int k = 0; k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++, idx++) {
+                if (!mask[idx]) continue;
+                double v = vs_volume_at(vol, idx);
+                vox[o].i = (uint16_t)i;
+                vox[o].j = (uint16_t)j;
+                vox[o].k = (uint16_t)k;
+                vox[o].pad = 0;
+                vox[o].value = isfinite(v) ? (float)v : 0.0f;
+                if (with_grad) {
+                    /* central differences on the grid (one-sided at borders) */
+                    const int p[3] = {i, j, k};
+                    const size_t st[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
+                    for (int a = 0; a < 3; a++) {
+                        int lo = p[a] > 0 ? 1 : 0, hi = p[a] < d[a] - 1 ? 1 : 0;
+                        double g = 0.0;
+                        if (lo + hi > 0) {
+                            double fh = vs_volume_at(vol, idx + hi * st[a]);
+                            double fl = vs_volume_at(vol, idx - lo * st[a]);
+                            g = (fh - fl) / (lo + hi);
+                            if (!isfinite(g)) g = 0.0;
+                        }
+                        grad[3 * o + a] = (float)g;
+                    }
+                }
+                o++;
+            }
+    free(mask);
+    rc->count = count;
+    rc->voxels = vox;
+    rc->grad = grad;
+    return VS_OK;
+}
+
+vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c,
+                          int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt)
+{
+    vs_relevant_cache *rc = ctx->relevant;
+    *rebuilt = 0;
+    if (rc && rc->vol == vol && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
+        rc->vmax == vol->vmax && rc->alpha_lo == c->alpha_lo && rc->alpha_hi == c->alpha_hi &&
+        rc->seam == seam && rc->with_grad >= with_grad) {
+        *out = rc;
+        return VS_OK;
+    }
+    vs_relevant_cache_free(rc);
+    ctx->relevant = NULL;
+    rc = calloc(1, sizeof *rc);
+    if (!rc) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    double t0 = vs_now_ms();
+    vs_status st = build(ctx, vol, c, seam, with_grad, rc);
+    if (st != VS_OK) {
+        free(rc);
+        return st;
+    }
+    rc->vol = vol;
+    memcpy(rc->dims, vol->dims, sizeof rc->dims);
+    rc->vmin = vol->vmin;
+    rc->vmax = vol->vmax;
+    rc->alpha_lo = c->alpha_lo;
+    rc->alpha_hi = c->alpha_hi;
+    rc->seam = seam;
+    rc->with_grad = with_grad;
+    rc->build_ms = vs_now_ms() - t0;
+    ctx->relevant = rc;
+    *out = rc;
+    *rebuilt = 1;
+    return VS_OK;
+}

@@ -1,0 +1,37 @@
+/* Relevant voxels (paper §2, §4.3): voxels whose value can be classified as
+ * non-transparent, plus the seam layer of neighbours within `seam` voxels
+ * (without the seam, post-shaded objects shrink and alias).  Built once per
+ * classification and kept in the context across frames. */
+#ifndef VS_RELEVANT_H
+#define VS_RELEVANT_H
+
+#include "internal.h"
+
+typedef struct vs_voxel {
+    uint16_t i, j, k, pad; /* grid position                         */
+    float value;           /* raw density                           */
+} vs_voxel;
+
+typedef struct vs_relevant_cache {
+    /* key: what the list was built from */
+    const struct vs_volume *vol;
+    int dims[3];
+    double vmin, vmax;
+    double alpha_lo, alpha_hi;
+    int seam;
+    int with_grad;
+    /* the list, ordered by k, then j, then i */
+    size_t count;
+    vs_voxel *voxels;
+    float *grad;           /* 3 per voxel, index units (with_grad only) */
+    double build_ms;
+} vs_relevant_cache;
+
+/* Returns the cached list if still valid, else rebuilds it.  *rebuilt tells
+ * which happened.  with_grad: also store grid central-difference gradients
+ * (pre-shaded pipelines shade voxels). */
+vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c,
+                          int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt);
+void vs_relevant_cache_free(vs_relevant_cache *rc);
+
+#endif

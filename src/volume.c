@@ -1,0 +1,155 @@
+/* Dense typed volumes: allocation with checked sizes, accessors, value range,
+ * and the histogram-based default iso-value (Otsu). */
+#include "internal.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+size_t vs_type_size(vs_type t)
+{
+    switch (t) {
+    case VS_U8: return 1;
+    case VS_I16:
+    case VS_U16: return 2;
+    case VS_F32: return 4;
+    }
+    return 0;
+}
+
+const char *vs_type_name(vs_type t)
+{
+    switch (t) {
+    case VS_U8: return "u8";
+    case VS_I16: return "i16";
+    case VS_U16: return "u16";
+    case VS_F32: return "f32";
+    }
+    return "unknown";
+}
+
+vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
+                          const double spacing[3], struct vs_volume **out)
+{
+    if (!dims || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume: NULL argument");
+    *out = NULL;
+    if (vs_type_size(type) == 0)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume: unknown voxel type %d", (int)type);
+    uint64_t n = 1;
+    for (int a = 0; a < 3; a++) {
+        if (dims[a] < 1 || dims[a] > VS_MAX_DIM)
+            return vs_set_error(ctx, VS_ERR_TOO_LARGE,
+                                "volume: dimension %d is %d (must be 1..%d)", a, dims[a], VS_MAX_DIM);
+        n *= (uint64_t)dims[a];
+        double sp = spacing ? spacing[a] : 1.0;
+        if (!(sp > 0.0) || !isfinite(sp) || sp > 1e12 || sp < 1e-12)
+            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
+                                "volume: spacing %d is %g (must be finite and > 0)", a, sp);
+    }
+    if (n > VS_MAX_VOXELS)
+        return vs_set_error(ctx, VS_ERR_TOO_LARGE, "volume: %llu voxels exceed the limit of %llu",
+                            (unsigned long long)n, (unsigned long long)VS_MAX_VOXELS);
+    struct vs_volume *v = calloc(1, sizeof *v);
+    if (!v) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "volume: out of memory");
+    v->data = calloc((size_t)n, vs_type_size(type));
+    if (!v->data) {
+        free(v);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "volume: cannot allocate %llu bytes",
+                            (unsigned long long)(n * vs_type_size(type)));
+    }
+    v->type = type;
+    for (int a = 0; a < 3; a++) {
+        v->dims[a] = dims[a];
+        v->spacing[a] = spacing ? spacing[a] : 1.0;
+    }
+    v->default_iso = NAN;
+    v->default_ramp = NAN;
+    *out = v;
+    return VS_OK;
+}
+
+vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
+                           const double spacing[3], vs_volume **out)
+{
+    return vs_volume_alloc(ctx, type, dims, spacing, out);
+}
+
+void vs_volume_release(vs_volume *v)
+{
+    if (!v) return;
+    free(v->data);
+    free(v);
+}
+
+void *vs_volume_data(vs_volume *v) { return v ? v->data : NULL; }
+void vs_volume_dims(const vs_volume *v, int dims[3])
+{
+    for (int a = 0; a < 3; a++) dims[a] = v ? v->dims[a] : 0;
+}
+void vs_volume_spacing(const vs_volume *v, double spacing[3])
+{
+    for (int a = 0; a < 3; a++) spacing[a] = v ? v->spacing[a] : 0.0;
+}
+vs_type vs_volume_type(const vs_volume *v) { return v ? v->type : VS_U8; }
+int vs_volume_has_analytic(const vs_volume *v) { return v && v->has_analytic; }
+
+void vs_volume_range(const vs_volume *v, double *lo, double *hi)
+{
+    if (lo) *lo = v ? v->vmin : 0.0;
+    if (hi) *hi = v ? v->vmax : 0.0;
+}
+
+void vs_volume_update_range(vs_volume *v)
+{
+    if (!v) return;
+    size_t n = (size_t)v->dims[0] * v->dims[1] * v->dims[2];
+    double lo = DBL_MAX, hi = -DBL_MAX;
+    for (size_t i = 0; i < n; i++) {
+        double x = vs_volume_at(v, i);
+        if (!isfinite(x)) continue;
+        if (x < lo) lo = x;
+        if (x > hi) hi = x;
+    }
+    if (lo > hi) lo = hi = 0.0; /* no finite value at all */
+    v->vmin = lo;
+    v->vmax = hi;
+}
+
+double vs_volume_default_iso(const vs_volume *v)
+{
+    if (!v) return 0.0;
+    if (isfinite(v->default_iso)) return v->default_iso;
+    enum { BINS = 256 };
+    double hist[BINS] = {0};
+    double lo = v->vmin, hi = v->vmax;
+    if (!(hi > lo)) return lo;
+    size_t n = (size_t)v->dims[0] * v->dims[1] * v->dims[2];
+    double scale = (BINS - 1) / (hi - lo);
+    for (size_t i = 0; i < n; i++) {
+        double x = vs_volume_at(v, i);
+        if (!isfinite(x)) continue;
+        hist[(int)((x - lo) * scale)] += 1.0;
+    }
+    /* Otsu: maximise between-class variance. */
+    double total = 0, sum = 0;
+    for (int i = 0; i < BINS; i++) {
+        total += hist[i];
+        sum += i * hist[i];
+    }
+    double w0 = 0, s0 = 0, best = -1;
+    int best_t = BINS / 2;
+    for (int t = 0; t < BINS - 1; t++) {
+        w0 += hist[t];
+        s0 += t * hist[t];
+        double w1 = total - w0;
+        if (w0 <= 0 || w1 <= 0) continue;
+        double m0 = s0 / w0, m1 = (sum - s0) / w1;
+        double between = w0 * w1 * (m0 - m1) * (m0 - m1);
+        if (between > best) {
+            best = between;
+            best_t = t;
+        }
+    }
+    return lo + (best_t + 0.5) / scale;
+}
