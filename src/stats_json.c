@@ -1,0 +1,169 @@
+/* Render statistics as JSON (the DESIGN.md §2 contract).
+ *
+ * vs_stats_to_json() behaves like snprintf: it returns the number of bytes the
+ * full document needs (excluding the terminating NUL) and writes at most cap
+ * bytes, always NUL-terminated when cap > 0.  Non-finite numbers become null,
+ * so the output is always valid JSON.  No global state. */
+#include "vsplat.h"
+
+#include <inttypes.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct json_out {
+    char *buf;
+    size_t cap;
+    size_t len; /* bytes needed so far (may exceed cap) */
+} json_out;
+
+static void put_raw(json_out *o, const char *s, size_t n)
+{
+    if (o->len < o->cap) {
+        size_t room = o->cap - o->len;
+        memcpy(o->buf + o->len, s, n < room ? n : room);
+    }
+    o->len += n;
+}
+
+static void put_str(json_out *o, const char *s) { put_raw(o, s, strlen(s)); }
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void put_fmt(json_out *o, const char *fmt, ...)
+{
+    char tmp[64];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (n < 0) n = 0;
+    if ((size_t)n >= sizeof tmp) n = (int)sizeof tmp - 1; /* numbers never get this long */
+    put_raw(o, tmp, (size_t)n);
+}
+
+/* A JSON string: quotes, backslash and control characters escaped. */
+static void put_json_string(json_out *o, const char *s)
+{
+    if (!s) {
+        put_str(o, "null");
+        return;
+    }
+    put_raw(o, "\"", 1);
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '"' || *p == '\\') {
+            char e[2] = {'\\', (char)*p};
+            put_raw(o, e, 2);
+        } else if (*p < 0x20) {
+            put_fmt(o, "\\u%04x", (unsigned)*p);
+        } else {
+            put_raw(o, (const char *)p, 1);
+        }
+    }
+    put_raw(o, "\"", 1);
+}
+
+static void put_double(json_out *o, double v)
+{
+    if (!isfinite(v)) {
+        put_str(o, "null");
+        return;
+    }
+    if (v == 0.0) v = 0.0; /* no "-0" */
+    /* shortest of %.15g / %.17g that reads back exactly */
+    char tmp[40];
+    snprintf(tmp, sizeof tmp, "%.15g", v);
+    if (strtod(tmp, NULL) != v) snprintf(tmp, sizeof tmp, "%.17g", v);
+    put_str(o, tmp);
+}
+
+static void key(json_out *o, const char *indent, const char *k)
+{
+    put_str(o, indent);
+    put_json_string(o, k);
+    put_str(o, ": ");
+}
+
+static void kv_str(json_out *o, const char *k, const char *v)
+{
+    key(o, "  ", k);
+    put_json_string(o, v);
+    put_str(o, ",\n");
+}
+
+static void kv_u64(json_out *o, const char *k, uint64_t v)
+{
+    key(o, "  ", k);
+    put_fmt(o, "%" PRIu64, v);
+    put_str(o, ",\n");
+}
+
+static void kv_int(json_out *o, const char *k, int v)
+{
+    key(o, "  ", k);
+    put_fmt(o, "%d", v);
+    put_str(o, ",\n");
+}
+
+static void kv_dbl(json_out *o, const char *k, double v)
+{
+    key(o, "  ", k);
+    put_double(o, v);
+    put_str(o, ",\n");
+}
+
+size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap)
+{
+    json_out o = {buf, buf ? cap : 0, 0};
+    vs_stats zero;
+    if (!st) {
+        memset(&zero, 0, sizeof zero);
+        st = &zero;
+    }
+    put_str(&o, "{\n");
+    kv_str(&o, "pipeline", st->pipeline);
+    kv_str(&o, "isa", st->isa);
+    kv_int(&o, "threads", st->threads);
+    kv_int(&o, "width", st->width);
+    kv_int(&o, "height", st->height);
+    kv_u64(&o, "voxels_total", st->voxels_total);
+    kv_u64(&o, "voxels_relevant", st->voxels_relevant);
+    kv_u64(&o, "voxels_splatted", st->voxels_splatted);
+    kv_u64(&o, "voxels_culled", st->voxels_culled);
+    kv_u64(&o, "sheets", st->sheets);
+    kv_u64(&o, "tiles_total", st->tiles_total);
+    kv_u64(&o, "tiles_shaded", st->tiles_shaded);
+    kv_dbl(&o, "ms_total", st->ms_total);
+
+    key(&o, "  ", "ms_stage");
+    put_str(&o, "{\n");
+    const struct {
+        const char *name;
+        double v;
+    } stage[5] = {{"setup", st->ms_stage.setup},
+                  {"rasterize", st->ms_stage.rasterize},
+                  {"gradient", st->ms_stage.gradient},
+                  {"shade", st->ms_stage.shade},
+                  {"composite", st->ms_stage.composite}};
+    for (int i = 0; i < 5; i++) {
+        key(&o, "    ", stage[i].name);
+        put_double(&o, stage[i].v);
+        put_str(&o, i < 4 ? ",\n" : "\n");
+    }
+    put_str(&o, "  },\n");
+
+    kv_dbl(&o, "ms_relevant", st->ms_relevant);
+    kv_dbl(&o, "iso_lo", st->iso_lo);
+    kv_dbl(&o, "iso_hi", st->iso_hi);
+    kv_dbl(&o, "ramp", st->ramp);
+    kv_int(&o, "pin_warning", st->pin_warning);
+    key(&o, "  ", "version");
+    put_json_string(&o, VS_VERSION_STRING);
+    put_str(&o, "\n}\n");
+
+    if (o.cap > 0) o.buf[o.len < o.cap ? o.len : o.cap - 1] = '\0';
+    return o.len;
+}

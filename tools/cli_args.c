@@ -1,0 +1,562 @@
+/* Command-line parsing for the vsplat tool (see cli_args.h). */
+#include "cli_args.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* ---- errors ---- */
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int fail(char *err, size_t cap, const char *fmt, ...)
+{
+    if (err && cap) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, cap, fmt, ap);
+        va_end(ap);
+    }
+    return 1;
+}
+
+/* ---- numbers ---- */
+
+/* A whole string as a finite double. */
+static int to_double(const char *s, double *out)
+{
+    if (!s || !*s) return 0;
+    char *end = NULL;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v)) return 0;
+    *out = v;
+    return 1;
+}
+
+/* A whole string as an int in [lo, hi]. */
+static int to_int(const char *s, long lo, long hi, int *out)
+{
+    if (!s || !*s) return 0;
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno == ERANGE || v < lo || v > hi) return 0;
+    *out = (int)v;
+    return 1;
+}
+
+/* Exactly n comma-separated finite doubles. */
+static int to_doubles(const char *s, int n, double *out)
+{
+    char buf[256];
+    size_t len = strlen(s);
+    if (len == 0 || len >= sizeof buf) return 0;
+    memcpy(buf, s, len + 1);
+    char *p = buf;
+    for (int i = 0; i < n; i++) {
+        char *comma = strchr(p, ',');
+        if (i < n - 1) {
+            if (!comma) return 0;
+            *comma = '\0';
+        } else if (comma) {
+            return 0;
+        }
+        if (!to_double(p, &out[i])) return 0;
+        p = comma ? comma + 1 : p;
+    }
+    return 1;
+}
+
+/* ---- the option table ---- */
+
+enum opt_id {
+    O_HELP, O_OUTPUT, O_SCENE, O_PIPELINE, O_ISO, O_RAMP, O_OPACITY, O_MATERIAL, O_BACKGROUND,
+    O_TF, O_SIZE, O_VIEW, O_ZOOM, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
+    O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
+    O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
+    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_QUIET
+};
+
+typedef struct opt_def {
+    const char *name;
+    int has_arg;
+    enum opt_id id;
+    int info_ok; /* also accepted by `vsplat info` */
+} opt_def;
+
+static const opt_def opt_table[] = {
+    {"--help", 0, O_HELP, 1},
+    {"-h", 0, O_HELP, 1},
+    {"-o", 1, O_OUTPUT, 0},
+    {"--output", 1, O_OUTPUT, 0},
+    {"--scene", 1, O_SCENE, 1},
+    {"--pipeline", 1, O_PIPELINE, 0},
+    {"--iso", 1, O_ISO, 0},
+    {"--ramp", 1, O_RAMP, 0},
+    {"--opacity", 1, O_OPACITY, 0},
+    {"--material", 1, O_MATERIAL, 0},
+    {"--background", 1, O_BACKGROUND, 0},
+    {"--tf", 1, O_TF, 0},
+    {"--size", 1, O_SIZE, 0},
+    {"--view", 1, O_VIEW, 0},
+    {"--zoom", 1, O_ZOOM, 0},
+    {"--center", 1, O_CENTER, 0},
+    {"--slab", 1, O_SLAB, 0},
+    {"--kernel-radius", 1, O_KRADIUS, 0},
+    {"--footprint-res", 1, O_FOOTPRINT, 0},
+    {"--seam", 1, O_SEAM, 0},
+    {"--threads", 1, O_THREADS, 0},
+    {"--isa", 1, O_ISA, 0},
+    {"--no-pin", 0, O_NO_PIN, 0},
+    {"--no-occlusion", 0, O_NO_OCCL, 0},
+    {"--occlusion-threshold", 1, O_OCCL_T, 0},
+    {"--no-tiles", 0, O_NO_TILES, 0},
+    {"--tile-size", 1, O_TILE_SIZE, 0},
+    {"--exact-normals", 0, O_EXACT_N, 0},
+    {"--normal-lut", 1, O_NORMAL_LUT, 0},
+    {"--ray-step", 1, O_RAY_STEP, 0},
+    {"--trilinear", 0, O_TRILINEAR, 0},
+    {"--no-analytic", 0, O_NO_ANALYTIC, 0},
+    {"--light", 1, O_LIGHT, 0},
+    {"--ambient", 1, O_AMBIENT, 0},
+    {"--diffuse", 1, O_DIFFUSE, 0},
+    {"--specular", 1, O_SPECULAR, 0},
+    {"--shininess", 1, O_SHININESS, 0},
+    {"--dims", 1, O_DIMS, 1},
+    {"--type", 1, O_TYPE, 1},
+    {"--spacing", 1, O_SPACING, 1},
+    {"--endian", 1, O_ENDIAN, 1},
+    {"--bits", 1, O_BITS, 0},
+    {"--stats", 1, O_STATS, 0},
+    {"--print-stats", 0, O_PRINT_STATS, 0},
+    {"-q", 0, O_QUIET, 0},
+    {"--quiet", 0, O_QUIET, 0},
+};
+
+/* Look up `arg` (possibly "--name=value"); sets *inline_val for the '=' form. */
+static const opt_def *find_opt(const char *arg, const char **inline_val)
+{
+    *inline_val = NULL;
+    const char *eq = strchr(arg, '=');
+    size_t n = eq && arg[1] == '-' ? (size_t)(eq - arg) : strlen(arg);
+    for (size_t i = 0; i < sizeof opt_table / sizeof opt_table[0]; i++) {
+        const opt_def *d = &opt_table[i];
+        if (strlen(d->name) == n && !strncmp(d->name, arg, n)) {
+            if (n < strlen(arg)) *inline_val = arg + n + 1;
+            return d;
+        }
+    }
+    return NULL;
+}
+
+/* ---- value parsers: each returns 0 or a usage error ---- */
+
+static int parse_range_double(const char *opt, const char *v, double lo, double hi, int lo_open,
+                              double *out, char *err, size_t cap)
+{
+    double x;
+    if (!to_double(v, &x)) return fail(err, cap, "%s: '%s' is not a number", opt, v);
+    if (x > hi || x < lo || (lo_open && x == lo))
+        return fail(err, cap, "%s: %s is out of range (%s%g..%g)", opt, v, lo_open ? "> " : "", lo, hi);
+    *out = x;
+    return 0;
+}
+
+static int parse_range_int(const char *opt, const char *v, long lo, long hi, int *out, char *err,
+                           size_t cap)
+{
+    double x;
+    if (to_int(v, lo, hi, out)) return 0;
+    if (to_double(v, &x) && x == floor(x))
+        return fail(err, cap, "%s: %s is out of range (%ld..%ld)", opt, v, lo, hi);
+    return fail(err, cap, "%s: '%s' is not an integer", opt, v);
+}
+
+static int parse_color(const char *opt, const char *v, int n, float *out, char *err, size_t cap)
+{
+    double c[4];
+    if (!to_doubles(v, n, c))
+        return fail(err, cap, "%s: expected %s (numbers in 0..1), got '%s'", opt,
+                    n == 3 ? "R,G,B" : "R,G,B,A", v);
+    for (int i = 0; i < n; i++) {
+        if (c[i] < 0.0 || c[i] > 1.0)
+            return fail(err, cap, "%s: component %g is out of range (0..1)", opt, c[i]);
+        out[i] = (float)c[i];
+    }
+    return 0;
+}
+
+static int parse_iso(const char *v, vs_settings *s, char *err, size_t cap)
+{
+    char buf[128];
+    size_t len = strlen(v);
+    if (len == 0 || len >= sizeof buf) return fail(err, cap, "--iso: expected LO[:HI], got '%s'", v);
+    memcpy(buf, v, len + 1);
+    char *colon = strchr(buf, ':');
+    double lo, hi = INFINITY;
+    if (colon) *colon = '\0';
+    if (!to_double(buf, &lo)) return fail(err, cap, "--iso: expected LO[:HI] (numbers), got '%s'", v);
+    if (colon) {
+        const char *h = colon + 1;
+        if (*h == '\0' || !strcasecmp(h, "inf") || !strcasecmp(h, "+inf")) {
+            hi = INFINITY;
+        } else if (!to_double(h, &hi)) {
+            return fail(err, cap, "--iso: expected LO[:HI] (numbers), got '%s'", v);
+        } else if (hi < lo) {
+            return fail(err, cap, "--iso: HI %g is below LO %g (the range %s is empty)", hi, lo, v);
+        }
+    }
+    s->has_iso = 1;
+    s->iso_lo = lo;
+    s->iso_hi = hi;
+    return 0;
+}
+
+static int parse_size(const char *v, vs_settings *s, char *err, size_t cap)
+{
+    char buf[64];
+    size_t len = strlen(v);
+    int w, h;
+    if (len == 0 || len >= sizeof buf) return fail(err, cap, "--size: expected WxH, got '%s'", v);
+    memcpy(buf, v, len + 1);
+    char *x = strchr(buf, 'x');
+    if (!x) x = strchr(buf, 'X');
+    if (!x) return fail(err, cap, "--size: expected WxH, got '%s'", v);
+    *x = '\0';
+    if (!to_int(buf, 1, VS_MAX_IMAGE_DIM, &w) || !to_int(x + 1, 1, VS_MAX_IMAGE_DIM, &h))
+        return fail(err, cap, "--size: expected WxH with each side in 1..%d, got '%s'", VS_MAX_IMAGE_DIM, v);
+    s->width = w;
+    s->height = h;
+    return 0;
+}
+
+static int parse_dims(const char *v, vs_load_options *l, char *err, size_t cap)
+{
+    double d[3];
+    if (!to_doubles(v, 3, d)) return fail(err, cap, "--dims: expected X,Y,Z (integers), got '%s'", v);
+    for (int i = 0; i < 3; i++) {
+        if (d[i] != floor(d[i]) || d[i] < 1 || d[i] > VS_MAX_DIM)
+            return fail(err, cap, "--dims: each dimension must be an integer in 1..%d, got '%s'", VS_MAX_DIM, v);
+        l->dims[i] = (int)d[i];
+    }
+    return 0;
+}
+
+static int parse_type(const char *v, vs_load_options *l, char *err, size_t cap)
+{
+    static const struct {
+        const char *name;
+        vs_type t;
+    } types[] = {{"u8", VS_U8}, {"i16", VS_I16}, {"u16", VS_U16}, {"f32", VS_F32}};
+    for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
+        if (!strcmp(v, types[i].name)) {
+            l->type = types[i].t;
+            return 0;
+        }
+    return fail(err, cap, "--type: expected u8, i16, u16 or f32, got '%s'", v);
+}
+
+static int parse_spacing(const char *v, vs_load_options *l, char *err, size_t cap)
+{
+    double d[3];
+    if (!to_doubles(v, 3, d)) return fail(err, cap, "--spacing: expected SX,SY,SZ, got '%s'", v);
+    for (int i = 0; i < 3; i++)
+        if (!(d[i] > 0.0 && d[i] <= 1e6))
+            return fail(err, cap, "--spacing: each spacing must be > 0 (and <= 1e6), got '%s'", v);
+    l->has_spacing = 1;
+    memcpy(l->spacing, d, sizeof d);
+    return 0;
+}
+
+/* ---- the parser ---- */
+
+typedef struct seen {
+    int dims, type, endian, spacing;
+} seen;
+
+static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *err, size_t cap)
+{
+    vs_settings *s = &o->s;
+    const char *n = d->name;
+    double t[3];
+    switch (d->id) {
+    case O_HELP: o->help = 1; return 0;
+    case O_OUTPUT: o->output = v; return 0;
+    case O_SCENE:
+        if (!*v) return fail(err, cap, "--scene: expected NAME[:N]");
+        o->scene = v;
+        return 0;
+    case O_PIPELINE:
+        if (vs_pipeline_parse(v, &s->pipeline) != VS_OK)
+            return fail(err, cap, "--pipeline: expected pre, post-cd, post-gs, post-alpha or raycast, got '%s'", v);
+        return 0;
+    case O_ISO: return parse_iso(v, s, err, cap);
+    case O_RAMP: return parse_range_double(n, v, 0.0, 1e300, 0, &s->ramp, err, cap);
+    case O_OPACITY: {
+        double a;
+        if (parse_range_double(n, v, 0.0, 1.0, 0, &a, err, cap)) return 1;
+        s->iso_opacity = (float)a;
+        return 0;
+    }
+    case O_MATERIAL: return parse_color(n, v, 3, s->material, err, cap);
+    case O_BACKGROUND: return parse_color(n, v, 4, s->background, err, cap);
+    case O_TF: return fail(err, cap, "--tf: transfer-function files are not supported yet");
+    case O_SIZE: return parse_size(v, s, err, cap);
+    case O_VIEW:
+        if (!to_doubles(v, 2, t)) return fail(err, cap, "--view: expected AZ,EL in degrees, got '%s'", v);
+        if (t[1] < -90.0 || t[1] > 90.0)
+            return fail(err, cap, "--view: elevation %g is out of range (-90..90)", t[1]);
+        if (fabs(t[0]) > 1e6) return fail(err, cap, "--view: azimuth %g is out of range", t[0]);
+        s->azimuth = t[0];
+        s->elevation = t[1];
+        return 0;
+    case O_ZOOM: return parse_range_double(n, v, 0.0, 1000.0, 1, &s->zoom, err, cap);
+    case O_CENTER:
+        if (!to_doubles(v, 3, t)) return fail(err, cap, "--center: expected X,Y,Z (voxel coordinates), got '%s'", v);
+        s->has_center = 1;
+        memcpy(s->center, t, sizeof s->center);
+        return 0;
+    case O_SLAB: return parse_range_double(n, v, 0.05, 64.0, 0, &s->slab, err, cap);
+    case O_KRADIUS: return parse_range_double(n, v, 0.5, 8.0, 0, &s->kernel_radius, err, cap);
+    case O_FOOTPRINT: return parse_range_int(n, v, 8, 65536, &s->footprint_resolution, err, cap);
+    case O_SEAM:
+        if (!strcmp(v, "auto")) {
+            s->seam = -1;
+            return 0;
+        }
+        return parse_range_int(n, v, -1, 16, &s->seam, err, cap);
+    case O_THREADS: return parse_range_int(n, v, 0, 4096, &s->threads, err, cap);
+    case O_ISA:
+        if (vs_isa_parse(v, &s->isa) != VS_OK)
+            return fail(err, cap, "--isa: expected auto, scalar, sse4, avx2 or avx512, got '%s'", v);
+        return 0;
+    case O_NO_PIN: s->pin = 0; return 0;
+    case O_NO_OCCL: s->occlusion = 0; return 0;
+    case O_OCCL_T: return parse_range_double(n, v, 0.0, 1.0, 1, &s->occlusion_threshold, err, cap);
+    case O_NO_TILES: s->tile_counters = 0; return 0;
+    case O_TILE_SIZE: return parse_range_int(n, v, 4, 4096, &s->tile_size, err, cap);
+    case O_EXACT_N: s->exact_normals = 1; return 0;
+    case O_NORMAL_LUT: return parse_range_int(n, v, 8, 65536, &s->normal_lut_size, err, cap);
+    case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
+    case O_TRILINEAR: s->ray_trilinear = 1; return 0;
+    case O_NO_ANALYTIC: s->ray_analytic = 0; return 0;
+    case O_LIGHT:
+        if (!to_doubles(v, 3, t)) return fail(err, cap, "--light: expected X,Y,Z (direction towards the light), got '%s'", v);
+        if (t[0] == 0.0 && t[1] == 0.0 && t[2] == 0.0)
+            return fail(err, cap, "--light: the direction must not be zero");
+        s->headlight = 0;
+        memcpy(s->light_dir, t, sizeof s->light_dir);
+        return 0;
+    case O_AMBIENT: return parse_range_double(n, v, 0.0, 10.0, 0, &s->ambient, err, cap);
+    case O_DIFFUSE: return parse_range_double(n, v, 0.0, 10.0, 0, &s->diffuse, err, cap);
+    case O_SPECULAR: return parse_range_double(n, v, 0.0, 10.0, 0, &s->specular, err, cap);
+    case O_SHININESS: return parse_range_double(n, v, 0.0, 10000.0, 0, &s->shininess, err, cap);
+    case O_DIMS: sn->dims = 1; return parse_dims(v, &o->load, err, cap);
+    case O_TYPE: sn->type = 1; return parse_type(v, &o->load, err, cap);
+    case O_SPACING: sn->spacing = 1; return parse_spacing(v, &o->load, err, cap);
+    case O_ENDIAN:
+        sn->endian = 1;
+        if (!strcmp(v, "little")) o->load.endian = VS_ENDIAN_LITTLE;
+        else if (!strcmp(v, "big")) o->load.endian = VS_ENDIAN_BIG;
+        else return fail(err, cap, "--endian: expected little or big, got '%s'", v);
+        return 0;
+    case O_BITS:
+        if (strcmp(v, "8") && strcmp(v, "16")) return fail(err, cap, "--bits: expected 8 or 16, got '%s'", v);
+        o->bits = atoi(v);
+        return 0;
+    case O_STATS:
+        if (!*v) return fail(err, cap, "--stats: expected a file name");
+        o->stats_path = v;
+        return 0;
+    case O_PRINT_STATS: o->print_stats = 1; return 0;
+    case O_QUIET: o->quiet = 1; return 0;
+    }
+    return fail(err, cap, "%s: unhandled option", n);
+}
+
+static int env_defaults(vs_settings *s, char *err, size_t cap)
+{
+    const char *t = getenv("VSPLAT_THREADS");
+    if (t && *t && !to_int(t, 0, 4096, &s->threads))
+        return fail(err, cap, "VSPLAT_THREADS: expected an integer in 0..4096, got '%s'", t);
+    const char *i = getenv("VSPLAT_ISA");
+    if (i && *i && vs_isa_parse(i, &s->isa) != VS_OK)
+        return fail(err, cap, "VSPLAT_ISA: expected auto, scalar, sse4, avx2 or avx512, got '%s'", i);
+    return 0;
+}
+
+static int parse_common(int argc, char **argv, cli_opts *o, int is_info, char *err, size_t cap)
+{
+    memset(o, 0, sizeof *o);
+    vs_settings_init(&o->s);
+    vs_load_options_init(&o->load);
+    o->bits = 8;
+    if (!is_info && env_defaults(&o->s, err, cap)) return 1;
+
+    seen sn = {0, 0, 0, 0};
+    int only_positional = 0;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        if (only_positional || a[0] != '-' || a[1] == '\0') {
+            if (o->input)
+                return fail(err, cap, "more than one input given ('%s' and '%s')", o->input, a);
+            o->input = a;
+            continue;
+        }
+        if (!strcmp(a, "--")) {
+            only_positional = 1;
+            continue;
+        }
+        const char *val = NULL;
+        const opt_def *d = find_opt(a, &val);
+        if (!d || (is_info && !d->info_ok))
+            return fail(err, cap, "%s: unknown option for '%s' (see vsplat %s --help)", a,
+                        is_info ? "info" : "render", is_info ? "info" : "render");
+        if (d->has_arg) {
+            if (!val) {
+                if (i + 1 >= argc) return fail(err, cap, "%s: missing value", d->name);
+                val = argv[++i];
+            }
+        } else if (val) {
+            return fail(err, cap, "%s: takes no value", d->name);
+        }
+        if (apply(d, val, o, &sn, err, cap)) return 1;
+        if (o->help) return 0;
+    }
+
+    /* input */
+    if (o->scene && o->input)
+        return fail(err, cap, "give either an input file or --scene, not both ('%s' and --scene %s)", o->input,
+                    o->scene);
+    if (!o->scene && !o->input) return fail(err, cap, "no input: give a volume file or --scene NAME[:N]");
+    if (sn.dims != sn.type)
+        return fail(err, cap, "raw input needs both --dims X,Y,Z and --type u8|i16|u16|f32");
+    if (sn.endian && !sn.dims) return fail(err, cap, "--endian applies to raw input only (give --dims and --type)");
+    if (o->scene && (sn.dims || sn.spacing))
+        return fail(err, cap, "--dims/--type/--spacing/--endian apply to volume files, not to --scene");
+    o->load.raw = sn.dims;
+
+    if (!is_info) {
+        if (!o->output) return fail(err, cap, "no output: give -o OUT (.png, .exr, .tif or .tiff)");
+        if (!cli_output_format(o->output))
+            return fail(err, cap, "%s: unknown image format (use .png, .exr, .tif or .tiff)", o->output);
+        if (o->stats_path && !strcmp(o->stats_path, o->output))
+            return fail(err, cap, "--stats: %s is also the output image", o->stats_path);
+    }
+    return 0;
+}
+
+int cli_parse_render(int argc, char **argv, cli_opts *o, char *err, size_t errcap)
+{
+    return parse_common(argc, argv, o, 0, err, errcap);
+}
+
+int cli_parse_info(int argc, char **argv, cli_opts *o, char *err, size_t errcap)
+{
+    return parse_common(argc, argv, o, 1, err, errcap);
+}
+
+const char *cli_output_format(const char *path)
+{
+    if (!path) return NULL;
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    if (!dot || dot == base) return NULL;
+    if (!strcasecmp(dot, ".png")) return "png";
+    if (!strcasecmp(dot, ".exr")) return "exr";
+    if (!strcasecmp(dot, ".tif") || !strcasecmp(dot, ".tiff")) return "tiff";
+    return NULL;
+}
+
+/* ---- usage ---- */
+
+void cli_usage(FILE *f)
+{
+    fprintf(f,
+            "vsplat %s — volume splatting without the blur\n"
+            "\n"
+            "usage:\n"
+            "  vsplat render INPUT [options] -o OUT   render a volume (INPUT: file, or --scene NAME[:N])\n"
+            "  vsplat info INPUT [raw options]       dimensions, type, spacing, value range, default iso\n"
+            "  vsplat compare A B                    rmse=… psnr=… ssim=… max=… of two images\n"
+            "  vsplat --version | --help\n"
+            "  vsplat render --help                  every render option\n"
+            "\n"
+            "exit codes: 0 success, 1 bad input or usage, 2 internal error\n"
+            "environment: VSPLAT_THREADS, VSPLAT_ISA (defaults for --threads, --isa), VSPLAT_DATA\n",
+            vs_version());
+}
+
+void cli_render_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: vsplat render INPUT [options] -o OUT\n"
+            "       vsplat render --scene NAME[:N] [options] -o OUT\n"
+            "\n"
+            "input:\n"
+            "  INPUT                  .nii/.nii.gz, .nrrd/.nhdr, .tif/.tiff stack, folder or .tar of PNG\n"
+            "                         slices, .den, or raw (with --dims and --type)\n"
+            "  --scene NAME[:N]       synthetic scene: cube, sphere, ml, head, cell (N voxels per side)\n"
+            "  --dims X,Y,Z           raw input dimensions (with --type)\n"
+            "  --type u8|i16|u16|f32  raw voxel type\n"
+            "  --endian little|big    raw byte order (default little)\n"
+            "  --spacing SX,SY,SZ     voxel spacing (overrides the file's)\n"
+            "output:\n"
+            "  -o OUT                 image; format from the extension: .png, .exr, .tif, .tiff\n"
+            "  --bits 8|16            PNG bit depth (default 8)\n"
+            "  --stats FILE.json      per-stage timings and counts as JSON\n"
+            "  --print-stats          per-stage timing table on stdout\n"
+            "  -q                     quiet: no summary line and no notes\n"
+            "pipeline and classification:\n"
+            "  --pipeline P           pre | post-cd | post-gs | post-alpha | raycast (default post-cd)\n"
+            "  --iso LO[:HI]          iso-range in data units (default: Otsu threshold, open range)\n"
+            "  --ramp W               opacity ramp half-width (default 2%% of the data range)\n"
+            "  --opacity A            opacity inside the iso-range, 0..1 (default 1)\n"
+            "  --material R,G,B       material colour, 0..1 (default 1,1,1)\n"
+            "  --background R,G,B,A   background, 0..1 (default 0,0,0,0)\n"
+            "  --tf FILE              transfer-function file (not supported yet)\n"
+            "view:\n"
+            "  --size WxH             image size (default 512x512)\n"
+            "  --view AZ,EL           azimuth, elevation in degrees (default 0,0)\n"
+            "  --zoom Z               largest extent spans Z of the image width (default 0.8)\n"
+            "  --center X,Y,Z         image centre in voxel coordinates (default: volume centre)\n"
+            "kernel and sheets:\n"
+            "  --slab DS              sheet thickness in voxel units, 0.05..64 (default 1)\n"
+            "  --kernel-radius R      Gaussian kernel radius, 0.5..8 (default 2)\n"
+            "  --footprint-res N      footprint table entries per radius unit (default 256)\n"
+            "  --seam N|auto          seam layer width in voxels (default auto)\n"
+            "leaving out work:\n"
+            "  --no-occlusion         no early splat elimination\n"
+            "  --occlusion-threshold T  opacity above which a pixel is occluded (default 0.995)\n"
+            "  --no-tiles             no tile counters: shade every tile of every sheet\n"
+            "  --tile-size N          tile edge in pixels, 4..4096 (default 64)\n"
+            "  --exact-normals        exact normalization instead of the Clyne-Dennis LUT\n"
+            "  --normal-lut N         angle bins of the shading table (default 256)\n"
+            "lighting (one directional light, Phong):\n"
+            "  --light X,Y,Z          direction towards the light, world space (turns the headlight off)\n"
+            "  --ambient K  --diffuse K  --specular K  --shininess N   (defaults 0.2 0.7 0.3 20)\n"
+            "reference ray caster (--pipeline raycast):\n"
+            "  --ray-step S           step in voxel units (default 0.1)\n"
+            "  --trilinear            trilinear instead of exact Gaussian reconstruction\n"
+            "  --no-analytic          sample the voxels even if the scene is analytic\n"
+            "execution:\n"
+            "  --threads N            worker threads, 0 = one per core (default $VSPLAT_THREADS or 0)\n"
+            "  --isa I                auto | scalar | sse4 | avx2 | avx512 (default $VSPLAT_ISA or auto)\n"
+            "  --no-pin               do not bind workers to cores\n"
+            "  --help                 this text\n");
+}
+
+void cli_info_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: vsplat info INPUT [--dims X,Y,Z --type u8|i16|u16|f32 [--endian little|big]]\n"
+            "                         [--spacing SX,SY,SZ]\n"
+            "       vsplat info --scene NAME[:N]\n"
+            "prints dims, type, spacing, range, voxels and default_iso, one 'key: value' per line\n");
+}

@@ -1,0 +1,44 @@
+/* Command-line parsing for the vsplat tool: render / info options into
+ * vs_settings and vs_load_options.  Strict: every malformed, unknown,
+ * incomplete or out-of-range argument is an error with a one-line message. */
+#ifndef VSPLAT_CLI_ARGS_H
+#define VSPLAT_CLI_ARGS_H
+
+#include "vsplat.h"
+
+#include <stddef.h>
+#include <stdio.h>
+
+/* Everything `vsplat render` (and, for the input part, `vsplat info`) takes. */
+typedef struct cli_opts {
+    vs_settings s;
+    vs_load_options load;
+    const char *input;      /* volume file, or NULL with scene            */
+    const char *scene;      /* --scene NAME[:N]                           */
+    const char *output;     /* -o OUT                                     */
+    const char *stats_path; /* --stats FILE.json                          */
+    int print_stats;        /* --print-stats                              */
+    int quiet;              /* -q                                         */
+    int bits;               /* --bits 8|16 (PNG depth)                    */
+    int help;               /* --help seen: print usage, exit 0           */
+} cli_opts;
+
+/* Parse `vsplat render` arguments (argv[0] is the first argument after
+ * "render").  Environment defaults: VSPLAT_THREADS, VSPLAT_ISA.
+ * Returns 0 on success, 1 on a usage error (message, without the "vsplat: "
+ * prefix and without a newline, in err). */
+int cli_parse_render(int argc, char **argv, cli_opts *o, char *err, size_t errcap);
+
+/* Parse `vsplat info` arguments: INPUT or --scene, plus the raw-input
+ * options (--dims, --type, --spacing, --endian).  Same return convention. */
+int cli_parse_info(int argc, char **argv, cli_opts *o, char *err, size_t errcap);
+
+/* Output format from the extension (.png, .exr, .tif, .tiff; any case):
+ * returns a short name ("png", "exr", "tiff") or NULL if unknown. */
+const char *cli_output_format(const char *path);
+
+void cli_usage(FILE *f);        /* whole tool                      */
+void cli_render_usage(FILE *f); /* every render option             */
+void cli_info_usage(FILE *f);
+
+#endif

@@ -1,0 +1,334 @@
+/* vsplat — command-line tool: render, info, compare (DESIGN.md §2).
+ *
+ * Exit codes: 0 success, 1 bad input or usage (one line on stderr naming the
+ * file or option and the problem), 2 internal error (out of memory, bug). */
+#include "cli_args.h"
+#include "vsplat.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+enum { EXIT_USAGE = 1, EXIT_INTERNAL = 2 };
+
+static int exit_code_for(vs_status st)
+{
+    return st == VS_ERR_INTERNAL || st == VS_ERR_OUT_OF_MEMORY ? EXIT_INTERNAL : EXIT_USAGE;
+}
+
+/* One line: "vsplat: PATH: problem".  The library's message is used as is if
+ * it already names the path. */
+static int report(vs_context *ctx, vs_status st, const char *path)
+{
+    const char *msg = ctx ? vs_last_error(ctx) : "";
+    if (!msg || !*msg) msg = vs_status_string(st);
+    if (path && !strstr(msg, path))
+        fprintf(stderr, "vsplat: %s: %s\n", path, msg);
+    else
+        fprintf(stderr, "vsplat: %s\n", msg);
+    return exit_code_for(st);
+}
+
+static int usage_error(const char *msg)
+{
+    fprintf(stderr, "vsplat: %s\n", msg);
+    return EXIT_USAGE;
+}
+
+/* The folder that will hold `path` must exist and be a writable directory. */
+static int check_writable_dir(const char *path, char *err, size_t cap)
+{
+    char dir[4096];
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        strcpy(dir, ".");
+    } else if (slash == path) {
+        strcpy(dir, "/");
+    } else {
+        size_t n = (size_t)(slash - path);
+        if (n >= sizeof dir) {
+            snprintf(err, cap, "%s: path is too long", path);
+            return 1;
+        }
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    }
+    struct stat sb;
+    if (stat(dir, &sb) != 0) {
+        snprintf(err, cap, "%s: cannot write: folder %s does not exist", path, dir);
+        return 1;
+    }
+    if (!S_ISDIR(sb.st_mode)) {
+        snprintf(err, cap, "%s: cannot write: %s is not a folder", path, dir);
+        return 1;
+    }
+    if (access(dir, W_OK) != 0) {
+        snprintf(err, cap, "%s: cannot write: folder %s is not writable", path, dir);
+        return 1;
+    }
+    if (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        snprintf(err, cap, "%s: cannot write: it is a folder", path);
+        return 1;
+    }
+    return 0;
+}
+
+static int load_input(vs_context *ctx, const cli_opts *o, vs_volume **vol)
+{
+    vs_status st = o->scene ? vs_volume_scene(ctx, o->scene, vol)
+                            : vs_volume_load(ctx, o->input, &o->load, vol);
+    if (st != VS_OK) return report(ctx, st, o->scene ? "--scene" : o->input);
+    return 0;
+}
+
+/* ---- stats ---- */
+
+/* JSON into "<path>.tmp.<pid>"; renamed into place by the caller. */
+static int write_stats_tmp(const vs_stats *st, const char *path, char *tmp, size_t tmpcap)
+{
+    snprintf(tmp, tmpcap, "%s.tmp.%ld", path, (long)getpid());
+    size_t need = vs_stats_to_json(st, NULL, 0);
+    char *buf = malloc(need + 1);
+    if (!buf) {
+        fprintf(stderr, "vsplat: %s: out of memory\n", path);
+        return EXIT_INTERNAL;
+    }
+    vs_stats_to_json(st, buf, need + 1);
+    FILE *f = fopen(tmp, "wb");
+    if (!f) {
+        fprintf(stderr, "vsplat: %s: cannot write: %s\n", path, strerror(errno));
+        free(buf);
+        return EXIT_USAGE;
+    }
+    int ok = fwrite(buf, 1, need, f) == need;
+    ok = (fclose(f) == 0) && ok;
+    free(buf);
+    if (!ok) {
+        fprintf(stderr, "vsplat: %s: cannot write: %s\n", path, strerror(errno));
+        remove(tmp);
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
+static void print_stats_table(const vs_stats *st)
+{
+    const vs_stage_times *t = &st->ms_stage;
+    double sum = t->setup + t->rasterize + t->gradient + t->shade + t->composite;
+    printf("pipeline %s, isa %s, %d thread%s, %dx%d\n", st->pipeline ? st->pipeline : "?",
+           st->isa ? st->isa : "?", st->threads, st->threads == 1 ? "" : "s", st->width, st->height);
+    printf("voxels: %llu total, %llu relevant, %llu splatted, %llu culled\n",
+           (unsigned long long)st->voxels_total, (unsigned long long)st->voxels_relevant,
+           (unsigned long long)st->voxels_splatted, (unsigned long long)st->voxels_culled);
+    printf("sheets: %llu, tile-sheets shaded: %llu of %llu\n", (unsigned long long)st->sheets,
+           (unsigned long long)st->tiles_shaded, (unsigned long long)st->tiles_total);
+    printf("%-22s %12s %7s\n", "stage", "ms", "share");
+    const struct {
+        const char *name;
+        double v;
+    } rows[5] = {{"setup", t->setup},
+                 {"rasterize", t->rasterize},
+                 {"gradient", t->gradient},
+                 {"shade", t->shade},
+                 {"composite", t->composite}};
+    for (int i = 0; i < 5; i++)
+        printf("%-22s %12.3f %6.1f%%\n", rows[i].name, rows[i].v, sum > 0 ? 100.0 * rows[i].v / sum : 0.0);
+    printf("%-22s %12.3f\n", "sum (over threads)", sum);
+    printf("%-22s %12.3f\n", "relevant-voxel list", st->ms_relevant);
+    printf("%-22s %12.3f\n", "total (wall clock)", st->ms_total);
+    if (st->pin_warning) printf("note: binding workers to cores failed\n");
+}
+
+/* ---- subcommands ---- */
+
+static int cmd_render(int argc, char **argv)
+{
+    cli_opts o;
+    char err[1024];
+    if (cli_parse_render(argc, argv, &o, err, sizeof err)) return usage_error(err);
+    if (o.help) {
+        cli_render_usage(stdout);
+        return 0;
+    }
+    if (check_writable_dir(o.output, err, sizeof err)) return usage_error(err);
+    if (o.stats_path && check_writable_dir(o.stats_path, err, sizeof err)) return usage_error(err);
+
+    vs_context *ctx = NULL;
+    vs_status st = vs_context_create(&ctx);
+    if (st != VS_OK) {
+        fprintf(stderr, "vsplat: cannot create a context: %s\n", vs_status_string(st));
+        return exit_code_for(st);
+    }
+    vs_volume *vol = NULL;
+    int rc = load_input(ctx, &o, &vol);
+    if (rc) {
+        vs_context_release(ctx);
+        return rc;
+    }
+
+    /* An iso-range outside the data is allowed (the image is blank), but say so. */
+    if (o.s.has_iso && o.s.tf_count == 0 && !o.quiet) {
+        double lo, hi;
+        vs_volume_range(vol, &lo, &hi);
+        double w = o.s.ramp >= 0 ? o.s.ramp : 0.02 * (hi - lo);
+        if (o.s.iso_lo - w > hi || o.s.iso_hi + w < lo)
+            fprintf(stderr, "vsplat: note: iso-range %g:%g lies outside the data range %g..%g; the image will be blank\n",
+                    o.s.iso_lo, o.s.iso_hi, lo, hi);
+    }
+
+    vs_image img = {0, 0, NULL};
+    vs_stats stats;
+    memset(&stats, 0, sizeof stats);
+    st = vs_render(ctx, vol, &o.s, &img, &stats);
+    vs_volume_release(vol);
+    if (st != VS_OK) {
+        rc = report(ctx, st, o.scene ? o.scene : o.input);
+        vs_image_free(&img);
+        vs_context_release(ctx);
+        return rc;
+    }
+
+    char stats_tmp[4200] = "";
+    if (o.stats_path) {
+        rc = write_stats_tmp(&stats, o.stats_path, stats_tmp, sizeof stats_tmp);
+        if (rc) {
+            vs_image_free(&img);
+            vs_context_release(ctx);
+            return rc;
+        }
+    }
+    st = vs_image_write(ctx, o.output, &img, o.bits);
+    vs_image_free(&img);
+    if (st != VS_OK) {
+        rc = report(ctx, st, o.output);
+        if (o.stats_path) remove(stats_tmp);
+        vs_context_release(ctx);
+        return rc;
+    }
+    vs_context_release(ctx);
+    if (o.stats_path && rename(stats_tmp, o.stats_path) != 0) {
+        fprintf(stderr, "vsplat: %s: cannot write: %s\n", o.stats_path, strerror(errno));
+        remove(stats_tmp);
+        remove(o.output); /* no half-finished results */
+        return EXIT_USAGE;
+    }
+
+    if (o.print_stats) print_stats_table(&stats);
+    if (!o.quiet)
+        fprintf(stderr, "vsplat: wrote %s (%dx%d, %s, %.1f ms)\n", o.output, stats.width, stats.height,
+                stats.pipeline ? stats.pipeline : vs_pipeline_name(o.s.pipeline), stats.ms_total);
+    return 0;
+}
+
+static int cmd_info(int argc, char **argv)
+{
+    cli_opts o;
+    char err[1024];
+    if (cli_parse_info(argc, argv, &o, err, sizeof err)) return usage_error(err);
+    if (o.help) {
+        cli_info_usage(stdout);
+        return 0;
+    }
+    vs_context *ctx = NULL;
+    vs_status st = vs_context_create(&ctx);
+    if (st != VS_OK) {
+        fprintf(stderr, "vsplat: cannot create a context: %s\n", vs_status_string(st));
+        return exit_code_for(st);
+    }
+    vs_volume *vol = NULL;
+    int rc = load_input(ctx, &o, &vol);
+    if (rc) {
+        vs_context_release(ctx);
+        return rc;
+    }
+    int d[3];
+    double sp[3], lo, hi;
+    vs_volume_dims(vol, d);
+    vs_volume_spacing(vol, sp);
+    vs_volume_range(vol, &lo, &hi);
+    printf("input: %s\n", o.scene ? o.scene : o.input);
+    printf("dims: %d %d %d\n", d[0], d[1], d[2]);
+    printf("type: %s\n", vs_type_name(vs_volume_type(vol)));
+    printf("spacing: %.9g %.9g %.9g\n", sp[0], sp[1], sp[2]);
+    printf("range: %.9g %.9g\n", lo, hi);
+    printf("voxels: %llu\n", (unsigned long long)d[0] * (unsigned long long)d[1] * (unsigned long long)d[2]);
+    printf("default_iso: %.9g\n", vs_volume_default_iso(vol));
+    printf("analytic: %s\n", vs_volume_has_analytic(vol) ? "yes" : "no");
+    vs_volume_release(vol);
+    vs_context_release(ctx);
+    return 0;
+}
+
+static int cmd_compare(int argc, char **argv)
+{
+    if (argc == 1 && (!strcmp(argv[0], "--help") || !strcmp(argv[0], "-h"))) {
+        printf("usage: vsplat compare A B\n"
+               "prints rmse=… psnr=… ssim=… max=… over all four channels (psnr inf if identical)\n");
+        return 0;
+    }
+    if (argc != 2) return usage_error("compare: expected two images: vsplat compare A B");
+    for (int i = 0; i < 2; i++)
+        if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            fprintf(stderr, "vsplat: %s: unknown option for 'compare'\n", argv[i]);
+            return EXIT_USAGE;
+        }
+    vs_context *ctx = NULL;
+    vs_status st = vs_context_create(&ctx);
+    if (st != VS_OK) {
+        fprintf(stderr, "vsplat: cannot create a context: %s\n", vs_status_string(st));
+        return exit_code_for(st);
+    }
+    vs_image a = {0, 0, NULL}, b = {0, 0, NULL};
+    int rc = 0;
+    st = vs_image_read(ctx, argv[0], &a);
+    if (st != VS_OK) {
+        rc = report(ctx, st, argv[0]);
+        goto done;
+    }
+    st = vs_image_read(ctx, argv[1], &b);
+    if (st != VS_OK) {
+        rc = report(ctx, st, argv[1]);
+        goto done;
+    }
+    if (a.width != b.width || a.height != b.height) {
+        fprintf(stderr, "vsplat: %s: size %dx%d differs from %s (%dx%d)\n", argv[1], b.width, b.height, argv[0],
+                a.width, a.height);
+        rc = EXIT_USAGE;
+        goto done;
+    }
+    vs_image_diff d;
+    st = vs_image_compare(ctx, &a, &b, &d);
+    if (st != VS_OK) {
+        rc = report(ctx, st, argv[1]);
+        goto done;
+    }
+    printf("rmse=%.6g psnr=%.6g ssim=%.6g max=%.6g\n", d.rmse, d.psnr, d.ssim, d.max_abs);
+done:
+    vs_image_free(&a);
+    vs_image_free(&b);
+    vs_context_release(ctx);
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) return usage_error("no command: vsplat render|info|compare ... (see vsplat --help)");
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V") || !strcmp(cmd, "version")) {
+        printf("vsplat %s\n", vs_version());
+        return 0;
+    }
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        cli_usage(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "render")) return cmd_render(argc - 2, argv + 2);
+    if (!strcmp(cmd, "info")) return cmd_info(argc - 2, argv + 2);
+    if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);
+    fprintf(stderr, "vsplat: %s: unknown command (render, info, compare; see vsplat --help)\n", cmd);
+    return EXIT_USAGE;
+}
