@@ -23,7 +23,8 @@ static int in_alpha_range(const vs_classify *c, double v)
     return v >= c->alpha_lo && v <= c->alpha_hi;
 }
 
-/* Dilate a byte mask along one axis by r (box), in place with a line buffer. */
+/* OR-dilate a byte mask of flag bits along one axis by r voxels (a box
+ * dilation is separable: one pass per axis). */
 static void dilate_axis(uint8_t *m, const int d[3], int axis, int r, uint8_t *line)
 {
     size_t stride[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
@@ -34,18 +35,28 @@ static void dilate_axis(uint8_t *m, const int d[3], int axis, int r, uint8_t *li
             uint8_t *base = m + a * stride[o1] + b * stride[o2];
             size_t st = stride[axis];
             for (int x = 0; x < n; x++) line[x] = base[x * st];
-            /* distance to the nearest set voxel, forward and backward */
-            int last = -1000000;
             for (int x = 0; x < n; x++) {
-                if (line[x] & 1) last = x;
-                if (x - last <= r) base[x * st] = 1;
-            }
-            last = 1000000;
-            for (int x = n - 1; x >= 0; x--) {
-                if (line[x] & 1) last = x;
-                if (last - x <= r) base[x * st] = 1;
+                uint8_t v = 0;
+                int lo = x - r < 0 ? 0 : x - r, hi = x + r >= n ? n - 1 : x + r;
+                for (int y = lo; y <= hi; y++) v |= line[y];
+                base[x * st] = v;
             }
         }
+}
+
+static void dilate(uint8_t *m, const int d[3], int r, uint8_t *line)
+{
+    if (r <= 0) return;
+    for (int axis = 0; axis < 3; axis++) dilate_axis(m, d, axis, r, line);
+}
+
+enum { BELOW = 1, INSIDE = 2, ABOVE = 4 };
+
+static uint8_t class_of(const vs_classify *c, double v)
+{
+    if (in_alpha_range(c, v)) return INSIDE;
+    if (!isfinite(v)) return 0;
+    return v <= c->alpha_lo ? BELOW : ABOVE;
 }
 
 static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c, int seam,
@@ -65,7 +76,7 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
     /* integer volumes: classify each possible value once */
     if (vol->type == VS_U8) {
         uint8_t lut[256];
-        for (int v = 0; v < 256; v++) lut[v] = (uint8_t)in_alpha_range(c, v);
+        for (int v = 0; v < 256; v++) lut[v] = class_of(c, v);
         const uint8_t *p = vol->data;
         for (size_t i = 0; i < n; i++) mask[i] = lut[p[i]];
     } else if (vol->type == VS_U16 || vol->type == VS_I16) {
@@ -76,7 +87,7 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
         }
         int off = vol->type == VS_I16 ? 32768 : 0;
-        for (int v = 0; v < 65536; v++) lut[v] = (uint8_t)in_alpha_range(c, v - off);
+        for (int v = 0; v < 65536; v++) lut[v] = class_of(c, v - off);
         if (vol->type == VS_U16) {
             const uint16_t *p = vol->data;
             for (size_t i = 0; i < n; i++) mask[i] = lut[p[i]];
@@ -87,11 +98,20 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
         free(lut);
     } else {
         const float *p = vol->data;
-        for (size_t i = 0; i < n; i++) mask[i] = (uint8_t)in_alpha_range(c, p[i]);
+        for (size_t i = 0; i < n; i++) mask[i] = class_of(c, p[i]);
     }
     if (seam > 0) {
-        /* a box dilation is separable: one running pass per axis */
-        for (int axis = 0; axis < 3; axis++) dilate_axis(mask, d, axis, seam, line);
+        /* Post-classified pipelines: the iso-range is met between voxels
+         * wherever a voxel's 3x3x3 neighbourhood holds a value inside the
+         * range or values on both sides of it (a thin ramp can fall between
+         * grid points).  Those voxels, dilated by the seam, are what the
+         * kernel needs to reconstruct every point where opacity is > 0. */
+        dilate(mask, d, 1, line);
+        for (size_t i = 0; i < n; i++)
+            mask[i] = (mask[i] & INSIDE) || (mask[i] & (BELOW | ABOVE)) == (BELOW | ABOVE);
+        dilate(mask, d, seam, line);
+    } else {
+        for (size_t i = 0; i < n; i++) mask[i] = (mask[i] & INSIDE) != 0;
     }
     free(line);
     size_t count = 0;

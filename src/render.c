@@ -1,0 +1,315 @@
+/* vs_render: validate, set up the frame (camera, classification, lighting,
+ * kernel tables, relevant voxels), transform and bin the voxels into tiles,
+ * run the tiles on the worker pool, and sum the workers' statistics. */
+#include "finish.h"
+#include "pool.h"
+#include "splat.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct bin_job {
+    vs_frame *F;
+    int nchunks;
+    uint32_t *counts;  /* nchunks * ntiles */
+    int fill;          /* 0: transform + count, 1: fill */
+} bin_job;
+
+static inline int tile_range(const vs_frame *F, float x, float y, int *tx0, int *tx1, int *ty0, int *ty1)
+{
+    const int W = F->cam.width, H = F->cam.height;
+    if (!(x + F->pad_x >= 0.0f) || !(x - F->pad_x <= (float)(W - 1)) || !(y + F->pad_y >= 0.0f) ||
+        !(y - F->pad_y <= (float)(H - 1)))
+        return 0; /* off screen (also rejects NaN) */
+    int a = (int)floorf((x - (float)F->pad_x) / (float)F->tile);
+    int b = (int)floorf((x + (float)F->pad_x) / (float)F->tile);
+    int c = (int)floorf((y - (float)F->pad_y) / (float)F->tile);
+    int d = (int)floorf((y + (float)F->pad_y) / (float)F->tile);
+    *tx0 = a < 0 ? 0 : a;
+    *tx1 = b >= F->tiles_x ? F->tiles_x - 1 : b;
+    *ty0 = c < 0 ? 0 : c;
+    *ty1 = d >= F->tiles_y ? F->tiles_y - 1 : d;
+    return 1;
+}
+
+/* Pre-shading of one voxel (pre and post-alpha): classified colour times the
+ * Phong terms from its grid gradient, for this view. */
+static void preshade(const vs_frame *F, size_t v, float out[4])
+{
+    const vs_voxel *vx = &F->rel->voxels[v];
+    const struct vs_camera *cam = &F->cam;
+    float rgb[3], a;
+    vs_classify_eval(F->cls, F->s, vx->value, rgb, &a);
+    const float *g = F->rel->grad + 3 * v;
+    /* index units -> world (per mm) -> eye frame */
+    double gw[3];
+    for (int i = 0; i < 3; i++) gw[i] = g[i] / F->spacing[i];
+    double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
+                   -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
+                   gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
+    double d, s;
+    vs_light_eval(&F->light, n, &d, &s);
+    for (int i = 0; i < 3; i++) out[i] = (float)(rgb[i] * d + s) * a;
+    out[3] = a;
+}
+
+static void bin_task(void *arg, int worker, int c)
+{
+    bin_job *J = arg;
+    vs_frame *F = J->F;
+    size_t n = F->rel->count;
+    size_t v0 = n * (size_t)c / J->nchunks, v1 = n * (size_t)(c + 1) / J->nchunks;
+    uint32_t *cnt = J->counts + (size_t)c * F->ntiles;
+    const vs_camera *cam = &F->cam;
+    for (size_t v = v0; v < v1; v++) {
+        if (!J->fill) {
+            const vs_voxel *vx = &F->rel->voxels[v];
+            double idx[3] = {vx->i, vx->j, vx->k}, p[3];
+            vs_camera_index_to_view(cam, idx, p);
+            F->vx[v] = (float)p[0];
+            F->vy[v] = (float)p[1];
+            F->vz[v] = (float)p[2];
+            if (F->payload) {
+                float *o = F->payload + 4 * v;
+                if (F->pipeline == VS_PIPELINE_PRE) {
+                    preshade(F, v, o);
+                } else { /* post-alpha: pre-shaded colour, raw density */
+                    preshade(F, v, o);
+                    o[3] = vx->value;
+                }
+            }
+        }
+        int tx0, tx1, ty0, ty1;
+        if (!tile_range(F, F->vx[v], F->vy[v], &tx0, &tx1, &ty0, &ty1)) continue;
+        for (int ty = ty0; ty <= ty1; ty++)
+            for (int tx = tx0; tx <= tx1; tx++) {
+                int t = ty * F->tiles_x + tx;
+                if (J->fill)
+                    F->tile_entries[cnt[t]++] = (uint32_t)v;
+                else
+                    cnt[t]++;
+            }
+    }
+}
+
+static vs_status ensure_pool(vs_context *ctx, const vs_settings *s)
+{
+    int want = s->threads;
+    if (want <= 0) want = vs_physical_cores();
+    if (ctx->pool && ctx->pool_threads == want && ctx->pool_pin == s->pin) return VS_OK;
+    vs_pool_destroy(ctx->pool);
+    ctx->pool = vs_pool_create(want, s->pin);
+    if (!ctx->pool) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "cannot create the worker pool");
+    ctx->pool_threads = want;
+    ctx->pool_pin = s->pin;
+    return VS_OK;
+}
+
+static vs_status check_settings(vs_context *ctx, const vs_settings *s)
+{
+    if ((int)s->pipeline < 0 || (int)s->pipeline > VS_PIPELINE_RAYCAST)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "unknown pipeline %d", (int)s->pipeline);
+    if (s->tile_size < 8 || s->tile_size > 4096)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "tile size %d must lie in [8, 4096]", s->tile_size);
+    if (s->threads < 0 || s->threads > 256)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "thread count %d must lie in [0, 256]", s->threads);
+    if (!(s->occlusion_threshold > 0.0 && s->occlusion_threshold <= 1.0))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "occlusion threshold %g must lie in (0, 1]",
+                            s->occlusion_threshold);
+    if (s->seam < -1 || s->seam > 16)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "seam %d must lie in [-1, 16]", s->seam);
+    if ((int)s->isa < 0 || (int)s->isa > VS_ISA_AVX512)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "unknown ISA %d", (int)s->isa);
+    for (int i = 0; i < 4; i++)
+        if (!(s->background[i] >= 0.0f && s->background[i] <= 1.0f))
+            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "background must lie in [0,1]");
+    for (int i = 0; i < 3; i++)
+        if (!(s->material[i] >= 0.0f && s->material[i] <= 1.0f))
+            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "material colour must lie in [0,1]");
+    if (!isfinite(s->ambient) || !isfinite(s->diffuse) || !isfinite(s->specular) || !isfinite(s->shininess) ||
+        s->ambient < 0 || s->diffuse < 0 || s->specular < 0 || s->shininess < 0 || s->shininess > 1e4)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "lighting coefficients must be finite and >= 0");
+    return VS_OK;
+}
+
+static void free_frame(vs_frame *F)
+{
+    vs_footprint_free(&F->fp);
+    vs_shade_lut_free(&F->lut);
+    free(F->cls);
+    free(F->vx);
+    free(F->vy);
+    free(F->vz);
+    free(F->payload);
+    free(F->tile_start);
+    free(F->tile_entries);
+    free(F->wstats);
+}
+
+static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, const vs_settings *s,
+                              vs_image *out, vs_stats *st)
+{
+    double t_start = vs_now_ms();
+    vs_frame F;
+    memset(&F, 0, sizeof F);
+    F.s = s;
+    F.pipeline = s->pipeline;
+    for (int i = 0; i < 3; i++) F.spacing[i] = vol->spacing[i];
+    vs_status rc;
+    float *image = NULL;
+    bin_job J = {0};
+
+    if ((rc = vs_camera_setup(ctx, vol, s, &F.cam)) != VS_OK) goto fail;
+    F.cls = malloc(sizeof *F.cls);
+    if (!F.cls) {
+        rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory");
+        goto fail;
+    }
+    if ((rc = vs_classify_setup(ctx, vol, s, F.cls)) != VS_OK) goto fail;
+    vs_light_setup(s, &F.cam, &F.light);
+    if ((rc = vs_footprint_setup(ctx, s, &F.cam, &F.fp)) != VS_OK) goto fail;
+    if (!s->exact_normals && (rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, &F.lut)) != VS_OK)
+        goto fail;
+    for (int i = 0; i < VS_TF_TABLE; i++)
+        F.alpha_corr[i] = (float)vs_opacity_correct(F.cls->alpha[i], s->slab);
+    for (int i = 0; i <= 1024; i++) F.opacity_corr[i] = (float)vs_opacity_correct(i / 1024.0, s->slab);
+
+    /* relevant voxels: pre-shaded splatting needs only the in-range voxels;
+     * the post-classified pipelines need the seam layer too (paper §4.3) */
+    int seam = s->seam >= 0 ? s->seam : (int)ceil(s->kernel_radius);
+    if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
+    int with_grad = s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA;
+    int rebuilt = 0;
+    double t_rel = vs_now_ms();
+    if ((rc = vs_relevant_get(ctx, vol, F.cls, seam, with_grad, &F.rel, &rebuilt)) != VS_OK) goto fail;
+    double ms_relevant = rebuilt ? vs_now_ms() - t_rel : 0.0;
+    if ((rc = ensure_pool(ctx, s)) != VS_OK) goto fail;
+    int nthreads = vs_pool_threads(ctx->pool);
+
+    double t_setup = vs_now_ms();
+    const int W = s->width, H = s->height;
+    size_t nv = F.rel->count;
+    F.tile = s->tile_size;
+    F.tiles_x = (W + F.tile - 1) / F.tile;
+    F.tiles_y = (H + F.tile - 1) / F.tile;
+    F.ntiles = F.tiles_x * F.tiles_y;
+    F.pad_x = F.fp.rx + 1.0; /* + the one-pixel seam for central differences */
+    F.pad_y = F.fp.ry + 1.0;
+    F.vx = malloc((nv ? nv : 1) * sizeof(float));
+    F.vy = malloc((nv ? nv : 1) * sizeof(float));
+    F.vz = malloc((nv ? nv : 1) * sizeof(float));
+    if (s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA)
+        F.payload = malloc((nv ? nv : 1) * 4 * sizeof(float));
+    F.tile_start = calloc((size_t)F.ntiles + 1, sizeof(uint32_t));
+    F.wstats = calloc((size_t)nthreads, sizeof *F.wstats);
+    image = malloc((size_t)W * H * 4 * sizeof(float));
+    J.F = &F;
+    J.nchunks = nv < 4096 ? 1 : nthreads * 4;
+    J.counts = calloc((size_t)J.nchunks * F.ntiles, sizeof(uint32_t));
+    if (!F.vx || !F.vy || !F.vz || (with_grad && !F.payload) || !F.tile_start || !F.wstats || !image ||
+        !J.counts) {
+        rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory for a %dx%d frame of %zu voxels", W, H, nv);
+        goto fail;
+    }
+    /* transform + count, prefix sums (tile-major, chunk-minor keeps voxel
+     * order inside each tile for any thread count), fill */
+    J.fill = 0;
+    vs_pool_run(ctx->pool, J.nchunks, bin_task, &J);
+    uint64_t total = 0;
+    for (int t = 0; t < F.ntiles; t++) {
+        F.tile_start[t] = (uint32_t)total;
+        for (int c = 0; c < J.nchunks; c++) {
+            uint32_t k = J.counts[(size_t)c * F.ntiles + t];
+            J.counts[(size_t)c * F.ntiles + t] = (uint32_t)total;
+            total += k;
+        }
+    }
+    if (total > UINT32_MAX) {
+        rc = vs_set_error(ctx, VS_ERR_TOO_LARGE, "too many voxel-tile entries (%llu)", (unsigned long long)total);
+        goto fail;
+    }
+    F.tile_start[F.ntiles] = (uint32_t)total;
+    F.tile_entries = malloc((total ? total : 1) * sizeof(uint32_t));
+    if (!F.tile_entries) {
+        rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory for %llu tile entries",
+                          (unsigned long long)total);
+        goto fail;
+    }
+    J.fill = 1;
+    vs_pool_run(ctx->pool, J.nchunks, bin_task, &J);
+    double ms_setup = vs_now_ms() - t_setup;
+
+    /* tiles, biggest first would balance better; voxel counts are a fair
+     * estimate but order does not change the result */
+    F.image = image;
+    vs_pool_run(ctx->pool, F.ntiles, vs_tile_render, &F);
+    if (atomic_load(&F.error)) {
+        rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory in a tile");
+        goto fail;
+    }
+    if (atomic_load(&F.cancel)) {
+        rc = vs_set_error(ctx, VS_ERR_CANCELLED, "render cancelled by the progress callback");
+        goto fail;
+    }
+    if (s->progress) s->progress(s->progress_user, 1.0);
+
+    out->width = W;
+    out->height = H;
+    out->rgba = image;
+    image = NULL;
+    if (st) {
+        memset(st, 0, sizeof *st);
+        st->pipeline = vs_pipeline_name(s->pipeline);
+        st->isa = "scalar";
+        st->threads = nthreads;
+        st->width = W;
+        st->height = H;
+        st->voxels_total = (uint64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
+        st->voxels_relevant = nv;
+        for (int w = 0; w < nthreads; w++) {
+            const vs_worker_stats *ws = &F.wstats[w];
+            st->voxels_splatted += ws->splatted;
+            st->voxels_culled += ws->culled;
+            st->sheets += ws->sheets;
+            st->tiles_total += ws->tiles_total;
+            st->tiles_shaded += ws->tiles_shaded;
+            st->ms_stage.rasterize += ws->ms_rasterize;
+            st->ms_stage.gradient += ws->ms_gradient;
+            st->ms_stage.shade += ws->ms_shade;
+            st->ms_stage.composite += ws->ms_composite;
+        }
+        st->ms_stage.setup = (t_setup - t_start - ms_relevant) + ms_setup;
+        st->ms_relevant = ms_relevant;
+        st->iso_lo = F.cls->lo;
+        st->iso_hi = F.cls->hi;
+        st->ramp = F.cls->ramp;
+        st->pin_warning = vs_pool_pin_failed(ctx->pool);
+        st->ms_total = vs_now_ms() - t_start;
+    }
+    free(J.counts);
+    free_frame(&F);
+    return VS_OK;
+fail:
+    free(J.counts);
+    free(image);
+    free_frame(&F);
+    return rc;
+}
+
+vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s, vs_image *out, vs_stats *st)
+{
+    if (!ctx) return VS_ERR_INVALID_ARGUMENT;
+    if (!vol || !s || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "vs_render: NULL argument");
+    out->width = out->height = 0;
+    out->rgba = NULL;
+    vs_status rc = check_settings(ctx, s);
+    if (rc != VS_OK) return rc;
+    if (s->pipeline == VS_PIPELINE_RAYCAST) return vs_raycast_render(ctx, vol, s, out, st);
+    if (s->isa > VS_ISA_SCALAR && s->isa > vs_isa_detect()) {
+        /* asking for more than the CPU has is a usage error, not a fallback */
+        return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "ISA %s is not supported by this CPU (best: %s)",
+                            vs_isa_name(s->isa), vs_isa_name(vs_isa_detect()));
+    }
+    return render_splat(ctx, vol, s, out, st);
+}

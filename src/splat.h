@@ -1,0 +1,52 @@
+/* One splatting frame: everything the per-tile sheet loop reads, built once
+ * per vs_render call and shared read-only by the workers. */
+#ifndef VS_SPLAT_H
+#define VS_SPLAT_H
+
+#include "footprint.h"
+#include "normals.h"
+#include "relevant.h"
+
+#include <stdatomic.h>
+
+typedef struct vs_worker_stats {
+    uint64_t splatted, culled, sheets, tiles_total, tiles_shaded;
+    double ms_rasterize, ms_gradient, ms_shade, ms_composite;
+    double pad[4]; /* keep workers' counters on separate cache lines */
+} vs_worker_stats;
+
+typedef struct vs_frame {
+    const vs_settings *s;
+    vs_pipeline pipeline;
+    vs_camera cam;
+    double spacing[3];               /* voxel spacing (gradients to world units) */
+    vs_classify *cls;
+    vs_light light;
+    vs_footprint fp;
+    vs_shade_lut lut;
+    const vs_relevant_cache *rel;
+    float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
+    float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
+
+    /* per relevant voxel, view-space position (x, y pixels; z view units) */
+    float *vx, *vy, *vz;
+    /* pre / post-alpha: per voxel splat payload (4 floats) */
+    float *payload;
+
+    /* tiles */
+    int tile, tiles_x, tiles_y, ntiles;
+    uint32_t *tile_start;            /* ntiles + 1                               */
+    uint32_t *tile_entries;          /* voxel indices, per tile in voxel order   */
+    double pad_x, pad_y;             /* footprint half-extent + seam, pixels     */
+
+    float *image;                    /* width*height*4 straight RGBA output      */
+    atomic_int cancel;
+    atomic_int error;                /* a worker ran out of memory               */
+    atomic_int tiles_done;
+    vs_worker_stats *wstats;         /* one per worker                           */
+} vs_frame;
+
+/* Render tile `task` of the frame (a vs_task_fn). */
+void vs_tile_render(void *frame, int worker, int task);
+
+#endif

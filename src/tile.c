@@ -1,0 +1,544 @@
+/* The per-tile sheet loop (paper §2 and §4): for each image-aligned sheet,
+ * front to back, rasterize the kernel sections of the tile's voxels into the
+ * tile's sheet buffer (which has a one-pixel seam for central differences),
+ * then classify, estimate gradients, shade and composite the touched part of
+ * the sheet, updating the tile's occlusion map (its accumulated opacity).
+ *
+ * A tile only reads shared, read-only frame data and writes its own pixels,
+ * so tiles run in any order on any thread and the image is bit-identical for
+ * every thread count. */
+#include "finish.h"
+#include "splat.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct rect {
+    int x0, y0, x1, y1; /* half-open, buffer coordinates */
+} rect;
+
+static inline void rect_clear(rect *r)
+{
+    r->x0 = r->y0 = 1 << 30;
+    r->x1 = r->y1 = -(1 << 30);
+}
+static inline int rect_empty(const rect *r) { return r->x0 >= r->x1 || r->y0 >= r->y1; }
+
+/* The geometry every rasterizer shares: where one kernel section lands. */
+typedef struct section {
+    float cx, cy;   /* centre in buffer coordinates (after the depth shift) */
+    float D;        /* depth integral over the slab                          */
+    float E;        /* exp(-k z1^2) - exp(-k z0^2), for the z gradient splat */
+} section;
+
+typedef struct tile_ctx {
+    const vs_frame *F;
+    const vs_footprint *fp;
+    int x0, y0, tw, th;  /* own pixels in image coordinates                 */
+    int bw, bh;          /* buffer size: own pixels plus a one-pixel seam    */
+    float ry0;           /* footprint half-height without shift              */
+} tile_ctx;
+
+/* Compute the slab section of voxel at depth z for sheet k; 0 if empty. */
+static inline int make_section(const tile_ctx *t, float x, float y, float z, int k, section *sec)
+{
+    const vs_footprint *fp = t->fp;
+    float slab = (float)fp->slab;
+    float z0 = (float)k * slab - z, z1 = z0 + slab;
+    float D = vs_fp_depth(fp, z1) - vs_fp_depth(fp, z0);
+    if (!(D > 0.0f)) return 0;
+    float rz = (float)fp->rz;
+    float c0 = z0 < -rz ? -rz : (z0 > rz ? rz : z0);
+    float c1 = z1 < -rz ? -rz : (z1 > rz ? rz : z1);
+    float kap = (float)fp->kappa;
+    float e0 = vs_fp_exp(fp, kap * c0 * c0), e1 = vs_fp_exp(fp, kap * c1 * c1);
+    if (fabsf(c0) >= rz) e0 = 0.0f;
+    if (fabsf(c1) >= rz) e1 = 0.0f;
+    sec->D = D;
+    sec->E = e1 - e0;
+    sec->cx = x - (float)(t->x0 - 1);
+    sec->cy = y - (float)(t->y0 - 1);
+    if (fp->sheared) { /* centroid of the depth term within the slab */
+        float zbar = (e0 - e1) / (2.0f * kap * D);
+        sec->cx += fp->sx * zbar;
+        sec->cy += fp->sy * zbar;
+    }
+    return 1;
+}
+
+/* Row range of a footprint inside the buffer. */
+static inline int rows_of(const tile_ctx *t, const section *sec, int *ya, int *yb)
+{
+    int a = (int)ceilf(sec->cy - t->ry0), b = (int)floorf(sec->cy + t->ry0);
+    if (a < 0) a = 0;
+    if (b > t->bh - 1) b = t->bh - 1;
+    *ya = a;
+    *yb = b;
+    return a <= b;
+}
+
+/* Column range of one footprint row; dx0 = first x minus the row centre. */
+static inline int cols_of(const tile_ctx *t, const section *sec, float dy, float *er, float *cxr,
+                          int *xa, int *xb)
+{
+    const vs_footprint *fp = t->fp;
+    float e = fp->row_k * dy * dy;
+    if (e >= (float)fp->emax) return 0;
+    float hw = sqrtf(((float)fp->emax - e) / fp->A);
+    float c = sec->cx + fp->row_shift * dy;
+    int a = (int)ceilf(c - hw), b = (int)floorf(c + hw);
+    if (a < 0) a = 0;
+    if (b > t->bw - 1) b = t->bw - 1;
+    *er = e;
+    *cxr = c;
+    *xa = a;
+    *xb = b;
+    return a <= b;
+}
+
+static inline void grow(rect *bb, int xa, int xb, int y)
+{
+    if (xa < bb->x0) bb->x0 = xa;
+    if (xb + 1 > bb->x1) bb->x1 = xb + 1;
+    if (y < bb->y0) bb->y0 = y;
+    if (y + 1 > bb->y1) bb->y1 = y + 1;
+}
+
+/* Density only (post-cd): one channel. */
+static void raster1(const tile_ctx *t, const section *sec, float w, float *q, rect *bb)
+{
+    const vs_footprint *fp = t->fp;
+    int ya, yb;
+    if (!rows_of(t, sec, &ya, &yb)) return;
+    w *= sec->D;
+    for (int y = ya; y <= yb; y++) {
+        float dy = (float)y - sec->cy, er, cxr;
+        int xa, xb;
+        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
+        float *row = q + (size_t)y * t->bw;
+        for (int x = xa; x <= xb; x++) {
+            float dx = (float)x - cxr;
+            row[x] += w * vs_fp_exp(fp, er + fp->A * dx * dx);
+        }
+        grow(bb, xa, xb, y);
+    }
+}
+
+/* Four interleaved channels with their own weights (pre, post-alpha). */
+static void raster4(const tile_ctx *t, const section *sec, const float w4[4], float *buf, rect *bb)
+{
+    const vs_footprint *fp = t->fp;
+    int ya, yb;
+    if (!rows_of(t, sec, &ya, &yb)) return;
+    float w[4] = {w4[0] * sec->D, w4[1] * sec->D, w4[2] * sec->D, w4[3] * sec->D};
+    for (int y = ya; y <= yb; y++) {
+        float dy = (float)y - sec->cy, er, cxr;
+        int xa, xb;
+        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
+        float *row = buf + (size_t)y * t->bw * 4;
+        for (int x = xa; x <= xb; x++) {
+            float dx = (float)x - cxr;
+            float h = vs_fp_exp(fp, er + fp->A * dx * dx);
+            float *p = row + 4 * x;
+            p[0] += w[0] * h;
+            p[1] += w[1] * h;
+            p[2] += w[2] * h;
+            p[3] += w[3] * h;
+        }
+        grow(bb, xa, xb, y);
+    }
+}
+
+/* Density plus the three gradient splats dH/dx, dH/dy, dH/dz (FH'):
+ * grad h = -2 Q v h; in-sheet (Qxx d)_x = A dx_row, (Qxx d)_y = B dx + row_k dy
+ * (d relative to the shifted centre); the z part integrates exactly to
+ * E - 2 D (Qzx d_x + Qzy d_y).  Layout: q, gx, gy, gz per pixel. */
+static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf, rect *bb)
+{
+    const vs_footprint *fp = t->fp;
+    int ya, yb;
+    if (!rows_of(t, sec, &ya, &yb)) return;
+    float wD = w * sec->D, wE = w * sec->E;
+    float A = fp->A, B = fp->B, rk = fp->row_k;
+    float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
+    for (int y = ya; y <= yb; y++) {
+        float dy = (float)y - sec->cy, er, cxr;
+        int xa, xb;
+        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
+        float *row = buf + (size_t)y * t->bw * 4;
+        for (int x = xa; x <= xb; x++) {
+            float dx = (float)x - cxr;
+            float h = vs_fp_exp(fp, er + A * dx * dx);
+            float dxs = dx + rs * dy; /* x offset from the shifted centre */
+            float *p = row + 4 * x;
+            p[0] += wD * h;
+            p[1] += -2.0f * wD * h * (A * dx);
+            p[2] += -2.0f * wD * h * (B * dx + rk * dy);
+            p[3] += h * (wE - 2.0f * wD * (qzx * dxs + qzy * dy));
+        }
+        grow(bb, xa, xb, y);
+    }
+}
+
+/* Early splat elimination.  The paper tests the occlusion map at the
+ * projected voxel centre; culling a voxel whose centre is covered but whose
+ * footprint still reaches open pixels removes density from their sheets and
+ * bends their gradients (visible as rings on an opaque sphere).  So, as in
+ * the occlusion test of Mueller et al. [22], we test the footprint's whole
+ * extent (plus the one-pixel seam the central differences read): a voxel is
+ * culled only if every pixel of the tile it can affect is opaque.  A
+ * summed-area table of the tile's opaque pixels answers that in O(1). */
+static void build_sat(const tile_ctx *t, const float *acc, float thr, int *sat)
+{
+    int w = t->tw + 1;
+    for (int x = 0; x < w; x++) sat[x] = 0;
+    for (int y = 0; y < t->th; y++) {
+        int run = 0;
+        sat[(y + 1) * w] = 0;
+        for (int x = 0; x < t->tw; x++) {
+            run += acc[4 * (y * t->tw + x) + 3] >= thr;
+            sat[(y + 1) * w + x + 1] = sat[y * w + x + 1] + run;
+        }
+    }
+}
+
+static int footprint_occluded(const tile_ctx *t, const int *sat, float x, float y)
+{
+    const vs_frame *F = t->F;
+    /* footprint extent in own-pixel coordinates, one pixel wider */
+    int xa = (int)floorf(x - (float)F->pad_x) - t->x0, xb = (int)ceilf(x + (float)F->pad_x) - t->x0;
+    int ya = (int)floorf(y - (float)F->pad_y) - t->y0, yb = (int)ceilf(y + (float)F->pad_y) - t->y0;
+    if (xa < 0) xa = 0;
+    if (ya < 0) ya = 0;
+    if (xb > t->tw - 1) xb = t->tw - 1;
+    if (yb > t->th - 1) yb = t->th - 1;
+    if (xa > xb || ya > yb) return 1; /* touches no pixel of this tile */
+    int w = t->tw + 1;
+    int sum = sat[(yb + 1) * w + xb + 1] - sat[ya * w + xb + 1] - sat[(yb + 1) * w + xa] + sat[ya * w + xa];
+    return sum == (xb - xa + 1) * (yb - ya + 1);
+}
+
+static void clear_rect(float *buf, int bw, int ch, const rect *r)
+{
+    if (rect_empty(r)) return;
+    for (int y = r->y0; y < r->y1; y++)
+        memset(buf + ((size_t)y * bw + r->x0) * ch, 0, (size_t)(r->x1 - r->x0) * ch * sizeof(float));
+}
+
+static inline float lookup_corr(const vs_frame *F, const float *table, float v)
+{
+    const vs_classify *c = F->cls;
+    float x = (float)((v - c->vmin) * c->scale);
+    if (!(x > 0.0f)) x = 0.0f;
+    if (x >= (float)(VS_TF_TABLE - 1)) return table[VS_TF_TABLE - 1];
+    int i = (int)x;
+    float f = x - (float)i;
+    return table[i] + f * (table[i + 1] - table[i]);
+}
+
+static inline void lookup_color(const vs_frame *F, float v, float rgb[3])
+{
+    const vs_classify *c = F->cls;
+    float x = (float)((v - c->vmin) * c->scale);
+    if (!(x > 0.0f)) x = 0.0f;
+    int i = (int)x;
+    if (i >= VS_TF_TABLE - 1) {
+        rgb[0] = c->color[VS_TF_TABLE - 1][0];
+        rgb[1] = c->color[VS_TF_TABLE - 1][1];
+        rgb[2] = c->color[VS_TF_TABLE - 1][2];
+        return;
+    }
+    float f = x - (float)i;
+    for (int ch = 0; ch < 3; ch++) rgb[ch] = c->color[i][ch] + f * (c->color[i + 1][ch] - c->color[i][ch]);
+}
+
+static inline float pre_opacity(const vs_frame *F, float a)
+{
+    if (!(a > 0.0f)) return 0.0f;
+    if (a >= 1.0f) return F->opacity_corr[1024];
+    float x = a * 1024.0f;
+    int i = (int)x;
+    float f = x - (float)i;
+    return F->opacity_corr[i] + f * (F->opacity_corr[i + 1] - F->opacity_corr[i]);
+}
+
+/* Per-pixel scratch of one sheet: opacity, gradient/colour. */
+typedef struct shade_buf {
+    float *alpha; /* tw*th */
+    float *g;     /* tw*th*3: gradient, then shaded colour */
+} shade_buf;
+
+static inline void shade_gradient(const vs_frame *F, float gx, float gy, float gz, float *d, float *sp)
+{
+    /* view space (per pixel, per pixel, per view unit) -> eye frame per mm */
+    float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
+    gx *= ppm;
+    gy *= ppm;
+    gz *= zpm;
+    if (F->s->exact_normals) {
+        double n[3] = {gx, gy, gz}, dd, ss;
+        vs_light_eval(&F->light, n, &dd, &ss);
+        *d = (float)dd;
+        *sp = (float)ss;
+    } else {
+        vs_shade_lut_eval(&F->lut, gx, gy, gz, d, sp);
+    }
+}
+
+void vs_tile_render(void *arg, int worker, int task)
+{
+    vs_frame *F = arg;
+    const vs_settings *s = F->s;
+    vs_worker_stats *ws = &F->wstats[worker];
+    if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) return;
+    if (worker == 0 && s->progress) {
+        double frac = (double)atomic_load(&F->tiles_done) / F->ntiles;
+        if (s->progress(s->progress_user, frac)) atomic_store(&F->cancel, 1);
+    }
+    const int W = F->cam.width, T = F->tile;
+    const int tx = task % F->tiles_x, ty = task / F->tiles_x;
+    tile_ctx t;
+    t.F = F;
+    t.fp = &F->fp;
+    t.x0 = tx * T;
+    t.y0 = ty * T;
+    t.tw = (t.x0 + T > W ? W : t.x0 + T) - t.x0;
+    t.th = (t.y0 + T > F->cam.height ? F->cam.height : t.y0 + T) - t.y0;
+    t.bw = t.tw + 2;
+    t.bh = t.th + 2;
+    {
+        double det = (double)F->fp.A * F->fp.C - (double)F->fp.B * F->fp.B;
+        t.ry0 = (float)sqrt(F->fp.emax * F->fp.A / det);
+    }
+    const int npix = t.tw * t.th;
+    const uint32_t *ent = F->tile_entries + F->tile_start[task];
+    const int n = (int)(F->tile_start[task + 1] - F->tile_start[task]);
+    const vs_pipeline pl = F->pipeline;
+    const int ch = pl == VS_PIPELINE_POST_CD ? 1 : 4;
+    const int nsheet = pl == VS_PIPELINE_POST_CD ? 3 : 1;
+    const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
+    const float thr = (float)s->occlusion_threshold;
+
+    float *acc = calloc((size_t)npix * 4, sizeof(float));
+    int *kf = malloc((size_t)(n ? n : 1) * sizeof(int));
+    int *kl = malloc((size_t)(n ? n : 1) * sizeof(int));
+    int *order = malloc((size_t)(n ? n : 1) * sizeof(int));
+    int *active = malloc((size_t)(n ? n : 1) * sizeof(int));
+    float *sheets = calloc((size_t)nsheet * ch * t.bw * t.bh, sizeof(float));
+    shade_buf sb = {malloc((size_t)npix * sizeof(float)), malloc((size_t)npix * 3 * sizeof(float))};
+    int *bucket = NULL;
+    int *sat = calloc((size_t)(t.tw + 1) * (t.th + 1), sizeof(int));
+    if (!sat || !acc || !kf || !kl || !order || !active || !sheets || !sb.alpha || !sb.g) {
+        atomic_store(&F->error, 1);
+        goto done;
+    }
+
+    /* first and last sheet of each voxel, and a counting sort by the first */
+    int kmin = 1 << 30, kmax = -(1 << 30);
+    for (int e = 0; e < n; e++) {
+        float z = F->vz[ent[e]];
+        kf[e] = (int)floorf((z - rz) / slab);
+        kl[e] = (int)floorf((z + rz) / slab);
+        if (kf[e] < kmin) kmin = kf[e];
+        if (kl[e] > kmax) kmax = kl[e];
+    }
+    if (n > 0) {
+        int span = kmax - kmin + 1;
+        bucket = calloc((size_t)span + 1, sizeof(int));
+        if (!bucket) {
+            atomic_store(&F->error, 1);
+            goto done;
+        }
+        for (int e = 0; e < n; e++) bucket[kf[e] - kmin + 1]++;
+        for (int b = 0; b < span; b++) bucket[b + 1] += bucket[b];
+        for (int e = 0; e < n; e++) order[bucket[kf[e] - kmin]++] = e; /* stable */
+    }
+
+    rect bbox[3];
+    for (int i = 0; i < 3; i++) rect_clear(&bbox[i]);
+    float *buf[3] = {sheets, sheets + (size_t)ch * t.bw * t.bh, sheets + (size_t)2 * ch * t.bw * t.bh};
+    int nactive = 0, next_new = 0, opaque = 0, opaque_in_sat = 0;
+    const rect own = {1, 1, t.tw + 1, t.th + 1};
+    const float bscale = (float)(F->fp.b / slab);
+
+    /* Rasterize sheet k into buffer `dst`; maintains the active list. */
+#define RASTERIZE_SHEET(k, dst, bb)                                                                   \
+    do {                                                                                              \
+        double t0_ = vs_now_ms();                                                                     \
+        int keep_ = 0;                                                                                \
+        for (int a_ = 0; a_ < nactive; a_++)                                                          \
+            if (kl[active[a_]] >= (k)) active[keep_++] = active[a_];                                  \
+        nactive = keep_;                                                                              \
+        while (next_new < n && kf[order[next_new]] == (k)) active[nactive++] = order[next_new++];     \
+        for (int a_ = 0; a_ < nactive; a_++) {                                                        \
+            int e_ = active[a_];                                                                      \
+            uint32_t v_ = ent[e_];                                                                    \
+            float x_ = F->vx[v_], y_ = F->vy[v_];                                                     \
+            if (s->occlusion && opaque > 0 && footprint_occluded(&t, sat, x_, y_)) {                  \
+                ws->culled += (uint64_t)(kl[e_] - (k) + 1);                                           \
+                kl[e_] = (k)-1; /* dropped at the next update */                                      \
+                continue;                                                                             \
+            }                                                                                         \
+            section sec_;                                                                             \
+            if (!make_section(&t, x_, y_, F->vz[v_], (k), &sec_)) continue;                           \
+            ws->splatted++;                                                                           \
+            const float *pl_ = F->payload ? F->payload + 4 * (size_t)v_ : NULL;                       \
+            float val_ = F->rel->voxels[v_].value;                                                    \
+            switch (pl) {                                                                             \
+            case VS_PIPELINE_POST_CD: raster1(&t, &sec_, val_ * bscale, (dst), (bb)); break;          \
+            case VS_PIPELINE_POST_GS: raster_gs(&t, &sec_, val_ * bscale, (dst), (bb)); break;        \
+            default: {                                                                                \
+                float w4_[4] = {pl_[0] * bscale, pl_[1] * bscale, pl_[2] * bscale, pl_[3] * bscale};  \
+                raster4(&t, &sec_, w4_, (dst), (bb));                                                 \
+            }                                                                                         \
+            }                                                                                         \
+        }                                                                                             \
+        ws->ms_rasterize += vs_now_ms() - t0_;                                                        \
+    } while (0)
+
+    int cur = 0, prev = 2, nxt = 1;
+    if (n > 0 && pl == VS_PIPELINE_POST_CD) RASTERIZE_SHEET(kmin, buf[cur], &bbox[cur]);
+    for (int k = kmin; n > 0 && k <= kmax; k++) {
+        if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) break;
+        if (pl == VS_PIPELINE_POST_CD) {
+            if (k + 1 <= kmax) RASTERIZE_SHEET(k + 1, buf[nxt], &bbox[nxt]);
+        } else {
+            RASTERIZE_SHEET(k, buf[cur], &bbox[cur]);
+        }
+        ws->tiles_total++;
+        ws->sheets++;
+        /* tile counter: only the touched part of the sheet is shaded */
+        rect r = own;
+        if (s->tile_counters) {
+            r = bbox[cur];
+            if (r.x0 < own.x0) r.x0 = own.x0;
+            if (r.y0 < own.y0) r.y0 = own.y0;
+            if (r.x1 > own.x1) r.x1 = own.x1;
+            if (r.y1 > own.y1) r.y1 = own.y1;
+        }
+        if (!rect_empty(&r)) {
+            ws->tiles_shaded++;
+            const float *q = buf[cur];
+            /* 1. classification + gradients */
+            double t0 = vs_now_ms();
+            for (int y = r.y0; y < r.y1; y++)
+                for (int x = r.x0; x < r.x1; x++) {
+                    int o = (y - 1) * t.tw + (x - 1);
+                    size_t b = (size_t)y * t.bw + x;
+                    float a;
+                    if (pl == VS_PIPELINE_PRE) {
+                        a = q[4 * b + 3];
+                    } else if (pl == VS_PIPELINE_POST_CD) {
+                        a = lookup_corr(F, F->alpha_corr, q[b]);
+                        if (a > 0.0f) {
+                            sb.g[3 * o + 0] = 0.5f * (q[b + 1] - q[b - 1]);
+                            sb.g[3 * o + 1] = 0.5f * (q[b + t.bw] - q[b - t.bw]);
+                            sb.g[3 * o + 2] = (buf[nxt][b] - buf[prev][b]) / (2.0f * slab);
+                        }
+                    } else if (pl == VS_PIPELINE_POST_GS) {
+                        a = lookup_corr(F, F->alpha_corr, q[4 * b]);
+                        if (a > 0.0f) {
+                            sb.g[3 * o + 0] = q[4 * b + 1] / slab;
+                            sb.g[3 * o + 1] = q[4 * b + 2] / slab;
+                            sb.g[3 * o + 2] = q[4 * b + 3] / slab;
+                        }
+                    } else { /* post-alpha */
+                        a = lookup_corr(F, F->alpha_corr, q[4 * b + 3]);
+                    }
+                    sb.alpha[o] = a;
+                }
+            double t1 = vs_now_ms();
+            /* 2. shading: colour per pixel */
+            for (int y = r.y0; y < r.y1; y++)
+                for (int x = r.x0; x < r.x1; x++) {
+                    int o = (y - 1) * t.tw + (x - 1);
+                    size_t b = (size_t)y * t.bw + x;
+                    float a = sb.alpha[o];
+                    if (!(a > 0.0f)) continue;
+                    float *c = sb.g + 3 * o;
+                    if (pl == VS_PIPELINE_PRE) {
+                        /* opacity-weighted colour / interpolated opacity */
+                        float inv = 1.0f / a;
+                        float cr = q[4 * b] * inv, cg = q[4 * b + 1] * inv, cb = q[4 * b + 2] * inv;
+                        c[0] = cr > 1.0f ? 1.0f : cr;
+                        c[1] = cg > 1.0f ? 1.0f : cg;
+                        c[2] = cb > 1.0f ? 1.0f : cb;
+                        sb.alpha[o] = pre_opacity(F, a);
+                    } else if (pl == VS_PIPELINE_POST_ALPHA) {
+                        for (int i = 0; i < 3; i++) {
+                            float v = q[4 * b + i];
+                            c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
+                        }
+                    } else {
+                        float d, sp, rgb[3];
+                        shade_gradient(F, c[0], c[1], c[2], &d, &sp);
+                        lookup_color(F, pl == VS_PIPELINE_POST_CD ? q[b] : q[4 * b], rgb);
+                        c[0] = rgb[0] * d + sp;
+                        c[1] = rgb[1] * d + sp;
+                        c[2] = rgb[2] * d + sp;
+                    }
+                }
+            double t2 = vs_now_ms();
+            /* 3. front-to-back compositing; the accumulated opacity is the
+             * tile's occlusion map */
+            for (int y = r.y0; y < r.y1; y++)
+                for (int x = r.x0; x < r.x1; x++) {
+                    int o = (y - 1) * t.tw + (x - 1);
+                    float a = sb.alpha[o];
+                    if (!(a > 0.0f)) continue;
+                    float *p = acc + 4 * o;
+                    float before = p[3];
+                    float w = (1.0f - before) * a;
+                    p[0] += w * sb.g[3 * o];
+                    p[1] += w * sb.g[3 * o + 1];
+                    p[2] += w * sb.g[3 * o + 2];
+                    p[3] = before + w;
+                    if (p[3] > 1.0f) p[3] = 1.0f;
+                    if (before < thr && p[3] >= thr) opaque++;
+                }
+            if (s->occlusion && opaque != opaque_in_sat) {
+                build_sat(&t, acc, thr, sat);
+                opaque_in_sat = opaque;
+            }
+            double t3 = vs_now_ms();
+            ws->ms_gradient += t1 - t0;
+            ws->ms_shade += t2 - t1;
+            ws->ms_composite += t3 - t2;
+        }
+        /* retire the sheet */
+        if (pl == VS_PIPELINE_POST_CD) {
+            clear_rect(buf[prev], t.bw, ch, &bbox[prev]);
+            rect_clear(&bbox[prev]);
+            int old = prev;
+            prev = cur;
+            cur = nxt;
+            nxt = old;
+        } else {
+            clear_rect(buf[cur], t.bw, ch, &bbox[cur]);
+            rect_clear(&bbox[cur]);
+        }
+        if (s->occlusion && opaque >= npix) break; /* tile early termination */
+    }
+#undef RASTERIZE_SHEET
+
+done:
+    if (acc) {
+        for (int y = 0; y < t.th; y++)
+            for (int x = 0; x < t.tw; x++) {
+                size_t o = (size_t)(t.y0 + y) * W + (t.x0 + x);
+                vs_finish_pixel(acc + 4 * (y * t.tw + x), s->background, F->image + 4 * o);
+            }
+    }
+    free(acc);
+    free(kf);
+    free(kl);
+    free(order);
+    free(active);
+    free(sheets);
+    free(sb.alpha);
+    free(sb.g);
+    free(bucket);
+    free(sat);
+    atomic_fetch_add(&F->tiles_done, 1);
+}
