@@ -1,0 +1,193 @@
+/* NRRD (.nrrd, .nhdr + detached data) through Teem.  The header is read
+ * first without data, so absurd sizes are refused before Teem allocates;
+ * then the whole file is loaded.  uchar/short/ushort/float keep their type,
+ * other scalar types become f32.  Spacing per axis from nrrdSpacingCalculate
+ * (axis spacing, or the length of the space direction), else 1. */
+#include "load.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <teem/biff.h>
+#include <teem/nrrd.h>
+
+/* Takes Teem's accumulated error text (freeing it) into our message. */
+static vs_status teem_error(vs_context *ctx, vs_status st, const char *path, const char *what)
+{
+    char *e = biffGetDone(NRRD);
+    char msg[384] = "";
+    if (e) {
+        size_t j = 0;
+        for (size_t i = 0; e[i] && j + 3 < sizeof msg; i++) {
+            if (e[i] == '\n') {
+                if (e[i + 1]) {
+                    msg[j++] = ';';
+                    msg[j++] = ' ';
+                }
+            } else {
+                msg[j++] = e[i];
+            }
+        }
+        msg[j] = '\0';
+        free(e);
+    }
+    return vs_set_error(ctx, st, "%s: %s%s%s", path, what, *msg ? ": " : "", msg);
+}
+
+/* Bytes in the files that hold the data, or 0 if unknown. */
+static uint64_t data_bytes(const NrrdIoState *nio, uint64_t header_size)
+{
+    if (!nio->dataFNArr || nio->dataFNArr->len == 0) return header_size;
+    uint64_t sum = 0;
+    for (unsigned i = 0; i < nio->dataFNArr->len; i++) {
+        const char *fn = nio->dataFN[i];
+        char buf[4096];
+        struct stat st;
+        if (!fn) return 0;
+        if (fn[0] != '/' && nio->path && *nio->path)
+            snprintf(buf, sizeof buf, "%s/%s", nio->path, fn);
+        else
+            snprintf(buf, sizeof buf, "%s", fn);
+        if (stat(buf, &st) != 0) return 0;
+        sum += (uint64_t)st.st_size;
+    }
+    return sum;
+}
+
+static double nrrd_value(const void *p, int type, size_t i)
+{
+    switch (type) {
+    case nrrdTypeChar: return ((const signed char *)p)[i];
+    case nrrdTypeUChar: return ((const unsigned char *)p)[i];
+    case nrrdTypeShort: return ((const short *)p)[i];
+    case nrrdTypeUShort: return ((const unsigned short *)p)[i];
+    case nrrdTypeInt: return ((const int *)p)[i];
+    case nrrdTypeUInt: return ((const unsigned int *)p)[i];
+    case nrrdTypeLLong: return (double)((const long long *)p)[i];
+    case nrrdTypeULLong: return (double)((const unsigned long long *)p)[i];
+    case nrrdTypeFloat: return ((const float *)p)[i];
+    default: return ((const double *)p)[i];
+    }
+}
+
+vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
+{
+    uint64_t fsize;
+    vs_status st = vs_load_file_size(ctx, path, &fsize);
+    if (st != VS_OK) return st;
+    if (fsize == 0) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: empty file", path);
+
+    Nrrd *nrrd = nrrdNew();
+    NrrdIoState *nio = nrrdIoStateNew();
+    vs_volume *v = NULL;
+    if (!nrrd || !nio) {
+        st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+        goto done;
+    }
+    nrrdIoStateSet(nio, nrrdIoStateSkipData, AIR_TRUE);
+    if (nrrdLoad(nrrd, path, nio)) {
+        st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD header");
+        goto done;
+    }
+    if (nrrd->dim != 2 && nrrd->dim != 3) {
+        st = vs_set_error(ctx, VS_ERR_UNSUPPORTED, "%s: %u-D NRRD, expected a 3-D scalar volume",
+                          path, nrrd->dim);
+        goto done;
+    }
+    if (nrrd->type <= nrrdTypeUnknown || nrrd->type >= nrrdTypeBlock) {
+        st = vs_set_error(ctx, VS_ERR_UNSUPPORTED, "%s: unsupported NRRD type %d", path, nrrd->type);
+        goto done;
+    }
+    int64_t d[3];
+    for (unsigned a = 0; a < 3; a++) {
+        size_t n = a < nrrd->dim ? nrrd->axis[a].size : 1;
+        if (n > (size_t)VS_MAX_DIM) {
+            st = vs_set_error(ctx, VS_ERR_TOO_LARGE, "%s: axis %u has %zu samples (limit %d)", path,
+                              a, n, VS_MAX_DIM);
+            goto done;
+        }
+        d[a] = (int64_t)n;
+    }
+    size_t elem = nrrdTypeSize[nrrd->type];
+    uint64_t need;
+    st = vs_load_check_dims(ctx, path, d, elem, &need);
+    if (st != VS_OK) goto done;
+    /* Refuse sizes the data file(s) cannot hold before Teem allocates. */
+    uint64_t have = data_bytes(nio, fsize);
+    const NrrdEncoding *enc = nio->encoding;
+    if (have > 0 && enc) {
+        uint64_t limit = UINT64_MAX;
+        if (enc == nrrdEncodingRaw) limit = have;
+        else if (enc == nrrdEncodingGzip) limit = vs_load_inflate_bound(have);
+        else if (enc == nrrdEncodingAscii || enc == nrrdEncodingHex) limit = have * elem;
+        if (need > limit) {
+            st = vs_set_error(ctx, VS_ERR_FORMAT,
+                              "%s: truncated: expected %llu bytes of %s data, file has %llu", path,
+                              (unsigned long long)need, enc->name, (unsigned long long)have);
+            goto done;
+        }
+    }
+
+    /* Now the real read. */
+    nrrdIoStateNix(nio);
+    nio = nrrdIoStateNew();
+    nrrdNuke(nrrd);
+    nrrd = nrrdNew();
+    if (!nrrd || !nio) {
+        st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+        goto done;
+    }
+    if (nrrdLoad(nrrd, path, nio)) {
+        st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD");
+        goto done;
+    }
+    /* The file could have changed between the reads; check again. */
+    int dims[3];
+    for (unsigned a = 0; a < 3; a++) {
+        size_t n = a < nrrd->dim ? nrrd->axis[a].size : 1;
+        if ((int64_t)n != d[a] || !nrrd->data || nrrdTypeSize[nrrd->type] != elem) {
+            st = vs_set_error(ctx, VS_ERR_IO, "%s: file changed while reading", path);
+            goto done;
+        }
+        dims[a] = (int)n;
+    }
+    double spacing[3] = {1.0, 1.0, 1.0};
+    for (unsigned a = 0; a < nrrd->dim; a++) {
+        double sp = NAN, vec[NRRD_SPACE_DIM_MAX];
+        int ss = nrrdSpacingCalculate(nrrd, a, &sp, vec);
+        if (ss == nrrdSpacingStatusScalarNoSpace || ss == nrrdSpacingStatusScalarWithSpace ||
+            ss == nrrdSpacingStatusDirection) {
+            sp = fabs(sp);
+            if (sp > 0.0 && isfinite(sp)) spacing[a] = sp;
+        }
+    }
+    vs_type type;
+    switch (nrrd->type) {
+    case nrrdTypeUChar: type = VS_U8; break;
+    case nrrdTypeShort: type = VS_I16; break;
+    case nrrdTypeUShort: type = VS_U16; break;
+    default: type = VS_F32; break;
+    }
+    st = vs_load_alloc(ctx, path, type, dims, spacing, &v);
+    if (st != VS_OK) goto done;
+    size_t n = (size_t)dims[0] * dims[1] * dims[2];
+    if (type != VS_F32 || nrrd->type == nrrdTypeFloat) {
+        memcpy(v->data, nrrd->data, n * elem);
+    } else {
+        float *f = v->data;
+        for (size_t i = 0; i < n; i++) f[i] = (float)nrrd_value(nrrd->data, nrrd->type, i);
+    }
+    st = VS_OK;
+done:
+    if (nio) nrrdIoStateNix(nio);
+    if (nrrd) nrrdNuke(nrrd);
+    if (st != VS_OK) {
+        vs_volume_release(v);
+        return st;
+    }
+    *out = v;
+    return VS_OK;
+}

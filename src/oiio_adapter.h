@@ -1,0 +1,74 @@
+/* C interface to the OpenImageIO adapter (src/oiio_adapter.cpp), the only C++
+ * in the library.  Every entry catches exceptions and reports a status plus a
+ * message (which names the file) in the caller's buffer, so the C side never
+ * sees C++ and the adapter never touches a vs_context. */
+#ifndef VS_OIIO_ADAPTER_H
+#define VS_OIIO_ADAPTER_H
+
+#include "vsplat.h"
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Sample types the adapter reads into. */
+typedef enum vs_pixel_type {
+    VS_PIX_U8 = 0,
+    VS_PIX_I16 = 1,
+    VS_PIX_U16 = 2,
+    VS_PIX_F32 = 3,
+    VS_PIX_OTHER = 4 /* native type not one of the above (int8, uint32, ...) */
+} vs_pixel_type;
+
+/* What a page (subimage) holds, and the metadata the stack loader needs. */
+typedef struct vs_oiio_info {
+    int width, height, channels;
+    vs_pixel_type native;    /* file's sample type; half and double -> F32 */
+    int has_resolution;      /* XResolution/YResolution present and > 0 */
+    double xres, yres;       /* pixels per unit */
+    char description[2048];  /* ImageDescription (truncated), "" if none */
+} vs_oiio_info;
+
+typedef struct vs_oiio_reader vs_oiio_reader;
+
+/* Open an image file (mem == NULL) or an in-memory encoded image (mem/size;
+ * `name` then only picks the decoder by extension and names it in errors). */
+vs_status vs_oiio_open(const char *name, const void *mem, size_t size,
+                       vs_oiio_reader **out, char *err, size_t errcap);
+void vs_oiio_close(vs_oiio_reader *r);
+/* Number of subimages (pages), counted up to `cap` (so it never runs long). */
+vs_status vs_oiio_count_pages(vs_oiio_reader *r, int cap, int *count, char *err, size_t errcap);
+vs_status vs_oiio_page_info(vs_oiio_reader *r, int page, vs_oiio_info *info,
+                            char *err, size_t errcap);
+/* Read all channels of one page, interleaved, as `type` (U8/I16/U16 need the
+ * file's native type to match; F32 from any type keeps float values as they
+ * are).  dst must hold width*height*channels samples (checked). */
+vs_status vs_oiio_read_page(vs_oiio_reader *r, int page, vs_pixel_type type, void *dst,
+                            size_t dst_bytes, char *err, size_t errcap);
+
+/* Read a whole image as straight (unassociated) RGBA float: gray is spread
+ * to RGB, a missing alpha becomes 1.  *rgba is malloc'ed (free()). */
+vs_status vs_oiio_read_rgba(const char *path, int *width, int *height, float **rgba,
+                            char *err, size_t errcap);
+/* Write straight RGBA float.  Format from the extension: .png (8-bit, 16 when
+ * bits == 16), .exr (float, half when bits == 16; stored premultiplied as the
+ * format expects), .tif/.tiff (8/16-bit when bits is 8/16, else float).
+ * Written to a temporary name in the same folder and renamed; on failure no
+ * file is left behind. */
+vs_status vs_oiio_write_rgba(const char *path, int width, int height, const float *rgba,
+                             int bits, char *err, size_t errcap);
+
+/* Write `pages` single- or multi-channel pages of one size and sample type
+ * (U8/U16/F32) as one file: a multi-page TIFF, or one page of any format.
+ * xres/yres > 0 are stored as resolution; description (may be NULL) as
+ * ImageDescription.  Same temporary-file-and-rename rule as above. */
+vs_status vs_oiio_write_pages(const char *path, int width, int height, int channels,
+                              int pages, vs_pixel_type type, const void *data,
+                              double xres, double yres, const char *description,
+                              char *err, size_t errcap);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

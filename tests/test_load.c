@@ -1,0 +1,711 @@
+/* Volume loaders: the real files of MANIFEST.md, small files of every format
+ * written here (exact round trips), and hostile input (must fail quickly
+ * with a message naming the file, never crash). */
+#include "internal.h"
+#include "oiio_adapter.h"
+#include "testutil.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <time.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <teem/nrrd.h>
+
+static char tmp[1024];
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+static void path_of(char *buf, size_t cap, const char *name)
+{
+    snprintf(buf, cap, "%s/%s", tmp, name);
+}
+
+static void write_bytes(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f) {
+        fprintf(stderr, "cannot create %s\n", path);
+        exit(1);
+    }
+    if (n && fwrite(data, 1, n, f) != n) exit(1);
+    fclose(f);
+}
+
+static unsigned char *read_bytes(const char *path, size_t *n)
+{
+    *n = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long len = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *b = malloc((size_t)len + 1);
+    *n = fread(b, 1, (size_t)len, f);
+    fclose(f);
+    return b;
+}
+
+static void write_gz(const char *path, const void *data, size_t n)
+{
+    gzFile g = gzopen(path, "wb");
+    if (!g || gzwrite(g, data, (unsigned)n) != (int)n) exit(1);
+    gzclose(g);
+}
+
+static int ends_with_gz(const char *path)
+{
+    size_t n = strlen(path);
+    return n > 3 && strcmp(path + n - 3, ".gz") == 0;
+}
+
+static vs_volume *load(vs_context *ctx, const char *path, const vs_load_options *o)
+{
+    vs_volume *v = NULL;
+    vs_status st = vs_volume_load(ctx, path, o, &v);
+    CHECK(st == VS_OK && v, "%s: %s", path, vs_last_error(ctx));
+    return st == VS_OK ? v : NULL;
+}
+
+static void check_shape(const vs_volume *v, const char *what, int x, int y, int z, vs_type t,
+                        double sx, double sy, double sz, double tol)
+{
+    if (!v) return;
+    int d[3];
+    double s[3];
+    vs_volume_dims(v, d);
+    vs_volume_spacing(v, s);
+    CHECK(d[0] == x && d[1] == y && d[2] == z, "%s: dims %dx%dx%d, expected %dx%dx%d", what, d[0],
+          d[1], d[2], x, y, z);
+    CHECK(vs_volume_type(v) == t, "%s: type %s, expected %s", what, vs_type_name(vs_volume_type(v)),
+          vs_type_name(t));
+    CHECK(fabs(s[0] - sx) <= tol && fabs(s[1] - sy) <= tol && fabs(s[2] - sz) <= tol,
+          "%s: spacing %g,%g,%g, expected %g,%g,%g", what, s[0], s[1], s[2], sx, sy, sz);
+}
+
+/* Loading must fail with a message that names the file, quickly. */
+static void expect_fail(vs_context *ctx, const char *path, const vs_load_options *o, const char *why)
+{
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    vs_volume *v = (vs_volume *)1;
+    double t0 = now_s();
+    vs_status st = vs_volume_load(ctx, path, o, &v);
+    double dt = now_s() - t0;
+    const char *msg = vs_last_error(ctx);
+    CHECK(st != VS_OK, "%s (%s): loaded although it should fail", base, why);
+    CHECK(v == NULL, "%s (%s): out not cleared", base, why);
+    CHECK(msg && *msg && strstr(msg, base), "%s (%s): message '%s' does not name the file", base,
+          why, msg);
+    CHECK(dt < 5.0, "%s (%s): took %.1f s", base, why, dt);
+    if (st == VS_OK) vs_volume_release(v);
+    printf("  %-28s -> %s: %s\n", why, vs_status_string(st), msg);
+}
+
+/* ---- the real data ---- */
+
+typedef struct real_file {
+    const char *name;
+    int x, y, z;
+    vs_type type;
+    double sx, sy, sz;
+    int raw;          /* needs raw options (the table's dims, type, spacing) */
+    double lo, hi;    /* value range to check if hi > lo */
+} real_file;
+
+static void test_real(vs_context *ctx)
+{
+    const char *dir = tu_data_dir();
+    if (!dir) {
+        printf("SKIP: real data not found (set VSPLAT_DATA)\n");
+        return;
+    }
+    static const real_file files[] = {
+        {"unc_mrbrain_volpack_brainsmall_128x128x84_u8.den", 128, 128, 84, VS_U8, 1, 1, 1, 0, 0, 0},
+        {"colin27_ch2_mri_t1_head_181x217x181_u8.nii.gz", 181, 217, 181, VS_U8, 1, 1, 1, 0, 0, 0},
+        {"vtkjs_lidc2_ct_chest_256x256x133_u8.raw.gz", 256, 256, 133, VS_U8, 1.40625, 1.40625, 2.5, 1, 0, 0},
+        {"openscivis_csafe_heptane_sim_302x302x302_u8.nii.gz", 302, 302, 302, VS_U8, 1, 1, 1, 0, 0, 0},
+        {"invesalius_cranium_ct_head_256x256x108_i16le.raw.gz", 256, 256, 108, VS_I16, 0.9570312,
+         0.9570312, 1.5, 1, -1024, 2986},
+        {"vtkjs_headsq_head_64x64x93_i16le.raw.gz", 64, 64, 93, VS_I16, 3.2, 3.2, 1.5, 1, 0, 3926},
+        {"openscivis_bonsai_ct_256x256x256_u8.nii.gz", 256, 256, 256, VS_U8, 1, 1, 1, 0, 0, 0},
+        {"openscivis_engine_ct_256x256x128_u8.nii.gz", 256, 256, 128, VS_U8, 1, 1, 1, 0, 0, 0},
+        {"isbi2012_sstem_drosophila_vnc_512x512x30_u8_png.tar", 512, 512, 30, VS_U8, 1, 1, 1, 0, 0, 0},
+        {"snt_spotspine_confocal_dendrite_116x157x41_u8.tif", 116, 157, 41, VS_U8, 0.06, 0.06, 0.21, 0, 0, 0},
+    };
+    char path[8192];
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        const real_file *f = &files[i];
+        snprintf(path, sizeof path, "%s/%s", dir, f->name);
+        vs_load_options o;
+        vs_load_options_init(&o);
+        if (f->raw) {
+            o.raw = 1;
+            o.dims[0] = f->x;
+            o.dims[1] = f->y;
+            o.dims[2] = f->z;
+            o.type = f->type;
+            o.endian = VS_ENDIAN_LITTLE;
+            o.has_spacing = 1;
+            o.spacing[0] = f->sx;
+            o.spacing[1] = f->sy;
+            o.spacing[2] = f->sz;
+        }
+        double t0 = now_s();
+        vs_volume *v = load(ctx, path, &o);
+        double dt = now_s() - t0;
+        if (!v) continue;
+        check_shape(v, f->name, f->x, f->y, f->z, f->type, f->sx, f->sy, f->sz, 1e-4);
+        double lo, hi;
+        vs_volume_range(v, &lo, &hi);
+        CHECK(hi > lo, "%s: constant volume %g..%g", f->name, lo, hi);
+        if (f->hi > f->lo)
+            CHECK(lo == f->lo && hi == f->hi, "%s: range %g..%g, expected %g..%g", f->name, lo, hi,
+                  f->lo, f->hi);
+        int d[3];
+        double s[3];
+        vs_volume_dims(v, d);
+        vs_volume_spacing(v, s);
+        printf("  %-52s %dx%dx%d %s spacing %g,%g,%g range %g..%g (%.0f ms)\n", f->name, d[0], d[1],
+               d[2], vs_type_name(vs_volume_type(v)), s[0], s[1], s[2], lo, hi, dt * 1e3);
+        vs_volume_release(v);
+    }
+    /* The named raw files also load without options (dims/type from the name). */
+    snprintf(path, sizeof path, "%s/%s", dir, "vtkjs_headsq_head_64x64x93_i16le.raw.gz");
+    vs_volume *v = load(ctx, path, NULL);
+    check_shape(v, "headsq by name", 64, 64, 93, VS_I16, 1, 1, 1, 0);
+    vs_volume_release(v);
+    /* Spacing override applies to any format. */
+    snprintf(path, sizeof path, "%s/%s", dir, "unc_mrbrain_volpack_brainsmall_128x128x84_u8.den");
+    vs_load_options o;
+    vs_load_options_init(&o);
+    o.has_spacing = 1;
+    o.spacing[2] = 1.3;
+    v = load(ctx, path, &o);
+    check_shape(v, "den with spacing", 128, 128, 84, VS_U8, 1, 1, 1.3, 0);
+    vs_volume_release(v);
+}
+
+/* ---- round trips of small files written here ---- */
+
+enum { NX = 7, NY = 5, NZ = 3 };
+
+/* NIfTI-1 single-file writer (348-byte header, vox_offset 352).  The build
+ * gives tests no nifticlib include path, so the header is written here from
+ * the NIfTI-1 specification; the loader reads it back with nifticlib. */
+enum { DT_U8 = 2, DT_I16 = 4, DT_F32 = 16, DT_F64 = 64, DT_U16 = 512 };
+static void write_nifti(const char *path, int ndim, const int dims[4], int datatype, int bitpix,
+                        const float pixdim[3], float slope, float inter, const void *data,
+                        size_t nbytes)
+{
+    unsigned char h[352];
+    memset(h, 0, sizeof h);
+    int32_t i32 = 348;
+    memcpy(h, &i32, 4);
+    int16_t dim[8] = {(int16_t)ndim, 1, 1, 1, 1, 1, 1, 1};
+    for (int a = 0; a < ndim; a++) dim[a + 1] = (int16_t)dims[a];
+    memcpy(h + 40, dim, sizeof dim);
+    int16_t dt = (int16_t)datatype, bp = (int16_t)bitpix;
+    memcpy(h + 70, &dt, 2);
+    memcpy(h + 72, &bp, 2);
+    float pd[8] = {1, pixdim[0], pixdim[1], pixdim[2], 1, 1, 1, 1};
+    memcpy(h + 76, pd, sizeof pd);
+    float vox_offset = 352;
+    memcpy(h + 108, &vox_offset, 4);
+    memcpy(h + 112, &slope, 4);
+    memcpy(h + 116, &inter, 4);
+    memcpy(h + 344, "n+1", 4);
+    unsigned char *all = malloc(sizeof h + nbytes);
+    memcpy(all, h, sizeof h);
+    memcpy(all + sizeof h, data, nbytes);
+    if (ends_with_gz(path)) write_gz(path, all, sizeof h + nbytes);
+    else write_bytes(path, all, sizeof h + nbytes);
+    free(all);
+}
+
+static void test_nifti(vs_context *ctx)
+{
+    char path[1100];
+    enum { N = NX * NY * NZ };
+    const int dims[4] = {NX, NY, NZ, 2};
+    const float sp[3] = {0.5f, -0.75f, 2.0f}; /* negative: spacing uses |pixdim| */
+    const float unit[3] = {1, 1, 1};
+    int16_t i16[N];
+    for (int i = 0; i < N; i++) i16[i] = (int16_t)(i * 37 - 500);
+    const char *names[] = {"t_i16.nii", "t_i16.nii.gz"};
+    for (int k = 0; k < 2; k++) {
+        path_of(path, sizeof path, names[k]);
+        write_nifti(path, 3, dims, DT_I16, 16, sp, 0.0f, 0.0f, i16, sizeof i16);
+        vs_volume *v = load(ctx, path, NULL);
+        check_shape(v, names[k], NX, NY, NZ, VS_I16, 0.5, 0.75, 2.0, 0);
+        if (v) CHECK(memcmp(vs_volume_data(v), i16, sizeof i16) == 0, "%s: data differ", names[k]);
+        vs_volume_release(v);
+    }
+    /* scl_slope turns u16 into f32; a 4-D file gives its first volume */
+    uint16_t u16[2 * N];
+    for (int i = 0; i < 2 * N; i++) u16[i] = (uint16_t)(i * 300);
+    path_of(path, sizeof path, "t_u16_scaled_4d.nii");
+    write_nifti(path, 4, dims, DT_U16, 16, unit, 2.0f, -1.0f, u16, sizeof u16);
+    vs_volume *v = load(ctx, path, NULL);
+    check_shape(v, "scaled 4-D nifti", NX, NY, NZ, VS_F32, 1, 1, 1, 0);
+    if (v) {
+        int bad = 0;
+        for (int i = 0; i < N; i++) bad += ((float *)vs_volume_data(v))[i] != (float)(2.0 * u16[i] - 1.0);
+        CHECK(bad == 0, "scaled nifti: %d voxels differ", bad);
+    }
+    vs_volume_release(v);
+    /* identity scaling keeps u16 */
+    path_of(path, sizeof path, "t_u16.nii");
+    write_nifti(path, 3, dims, DT_U16, 16, unit, 1.0f, 0.0f, u16, N * 2);
+    v = load(ctx, path, NULL);
+    check_shape(v, "u16 nifti", NX, NY, NZ, VS_U16, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), u16, N * 2) == 0, "u16 nifti: data differ");
+    vs_volume_release(v);
+    /* f64 becomes f32 */
+    double f64[N];
+    for (int i = 0; i < N; i++) f64[i] = i * 0.25 - 3.0;
+    path_of(path, sizeof path, "t_f64.nii.gz");
+    write_nifti(path, 3, dims, DT_F64, 64, unit, 0.0f, 0.0f, f64, sizeof f64);
+    v = load(ctx, path, NULL);
+    check_shape(v, "f64 nifti", NX, NY, NZ, VS_F32, 1, 1, 1, 0);
+    if (v) {
+        int bad = 0;
+        for (int i = 0; i < N; i++) bad += ((float *)vs_volume_data(v))[i] != (float)f64[i];
+        CHECK(bad == 0, "f64 nifti: %d voxels differ", bad);
+    }
+    vs_volume_release(v);
+    /* u8 with NaN slope (as in the real files): no scaling */
+    uint8_t u8[N];
+    for (int i = 0; i < N; i++) u8[i] = (uint8_t)(i * 5);
+    path_of(path, sizeof path, "t_u8_nan_slope.nii");
+    write_nifti(path, 3, dims, DT_U8, 8, unit, NAN, 0.0f, u8, sizeof u8);
+    v = load(ctx, path, NULL);
+    check_shape(v, "u8 nifti", NX, NY, NZ, VS_U8, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), u8, sizeof u8) == 0, "u8 nifti: data differ");
+    vs_volume_release(v);
+    /* zero spacing on a real axis is rejected */
+    const float zero[3] = {1, 0, 1};
+    path_of(path, sizeof path, "zero_pixdim.nii");
+    write_nifti(path, 3, dims, DT_U8, 8, zero, 0.0f, 0.0f, u8, sizeof u8);
+    expect_fail(ctx, path, NULL, "nifti zero pixdim");
+}
+
+static void test_nrrd(vs_context *ctx)
+{
+    char path[1100];
+    static uint16_t u16[NX * NY * NZ];
+    static double f64[NX * NY * NZ];
+    for (int i = 0; i < NX * NY * NZ; i++) {
+        u16[i] = (uint16_t)(i * 611);
+        f64[i] = i * 0.5 - 7.0;
+    }
+    const char *names[] = {"t_u16.nrrd", "t_u16.nhdr"};
+    for (int k = 0; k < 2; k++) {
+        Nrrd *n = nrrdNew();
+        CHECK(nrrdWrap_va(n, u16, nrrdTypeUShort, 3, (size_t)NX, (size_t)NY, (size_t)NZ) == 0, "wrap");
+        nrrdAxisInfoSet_va(n, nrrdAxisInfoSpacing, 0.5, 0.75, 2.0);
+        path_of(path, sizeof path, names[k]);
+        CHECK(nrrdSave(path, n, NULL) == 0, "nrrdSave %s", path);
+        nrrdNix(n);
+        vs_volume *v = load(ctx, path, NULL);
+        check_shape(v, names[k], NX, NY, NZ, VS_U16, 0.5, 0.75, 2.0, 0);
+        if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "%s: data differ", names[k]);
+        vs_volume_release(v);
+    }
+    {
+        Nrrd *n = nrrdNew();
+        CHECK(nrrdWrap_va(n, f64, nrrdTypeDouble, 3, (size_t)NX, (size_t)NY, (size_t)NZ) == 0, "wrap");
+        NrrdIoState *nio = nrrdIoStateNew();
+        nio->encoding = nrrdEncodingGzip;
+        path_of(path, sizeof path, "t_f64_gz.nrrd");
+        CHECK(nrrdSave(path, n, nio) == 0, "nrrdSave %s", path);
+        nrrdIoStateNix(nio);
+        nrrdNix(n);
+        vs_volume *v = load(ctx, path, NULL);
+        check_shape(v, "f64 nrrd", NX, NY, NZ, VS_F32, 1, 1, 1, 0);
+        if (v) {
+            int bad = 0;
+            for (int i = 0; i < NX * NY * NZ; i++) bad += ((float *)vs_volume_data(v))[i] != (float)f64[i];
+            CHECK(bad == 0, "f64 nrrd: %d voxels differ", bad);
+        }
+        vs_volume_release(v);
+    }
+}
+
+static void test_raw_den(vs_context *ctx)
+{
+    char path[1100];
+    enum { N = NX * NY * NZ };
+    /* big-endian u16, plain and gzip */
+    unsigned char be[2 * N];
+    for (int i = 0; i < N; i++) {
+        uint16_t x = (uint16_t)(i * 997 + 3);
+        be[2 * i] = (unsigned char)(x >> 8);
+        be[2 * i + 1] = (unsigned char)(x & 255);
+    }
+    vs_load_options o;
+    vs_load_options_init(&o);
+    o.raw = 1;
+    o.dims[0] = NX;
+    o.dims[1] = NY;
+    o.dims[2] = NZ;
+    o.type = VS_U16;
+    o.endian = VS_ENDIAN_BIG;
+    const char *names[] = {"t_be.raw", "t_be.raw.gz"};
+    for (int k = 0; k < 2; k++) {
+        path_of(path, sizeof path, names[k]);
+        if (k == 0) write_bytes(path, be, sizeof be);
+        else write_gz(path, be, sizeof be);
+        vs_volume *v = load(ctx, path, &o);
+        check_shape(v, names[k], NX, NY, NZ, VS_U16, 1, 1, 1, 0);
+        if (v) {
+            int bad = 0;
+            for (int i = 0; i < N; i++) bad += ((uint16_t *)vs_volume_data(v))[i] != (uint16_t)(i * 997 + 3);
+            CHECK(bad == 0, "%s: %d voxels differ", names[k], bad);
+        }
+        vs_volume_release(v);
+    }
+    /* f32 little-endian, dims and type from the name */
+    float f[N];
+    for (int i = 0; i < N; i++) f[i] = (float)i * 0.125f - 1.0f;
+    path_of(path, sizeof path, "named_7x5x3_f32le.raw");
+    write_bytes(path, f, sizeof f);
+    vs_volume *v = load(ctx, path, NULL);
+    check_shape(v, "named f32 raw", NX, NY, NZ, VS_F32, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), f, sizeof f) == 0, "named f32 raw: data differ");
+    vs_volume_release(v);
+
+    /* .den */
+    unsigned char den[62 + N];
+    memset(den, 0, sizeof den);
+    den[0] = 1;
+    den[50] = NX;
+    den[52] = NY;
+    den[54] = NZ;
+    den[58] = N & 255;
+    den[59] = N >> 8;
+    for (int i = 0; i < N; i++) den[62 + i] = (unsigned char)(i * 7);
+    path_of(path, sizeof path, "t.den");
+    write_bytes(path, den, sizeof den);
+    v = load(ctx, path, NULL);
+    check_shape(v, "den", NX, NY, NZ, VS_U8, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), den + 62, N) == 0, "den: data differ");
+    vs_volume_release(v);
+}
+
+/* Minimal ustar writer for the tests (the loader parses these). */
+static size_t tar_add(unsigned char *out, const char *name, const unsigned char *data, size_t n)
+{
+    unsigned char *h = out;
+    memset(h, 0, 512);
+    snprintf((char *)h, 100, "%s", name);
+    snprintf((char *)h + 100, 8, "%07o", 0644);
+    snprintf((char *)h + 108, 8, "%07o", 0);
+    snprintf((char *)h + 116, 8, "%07o", 0);
+    snprintf((char *)h + 124, 12, "%011lo", (unsigned long)n);
+    snprintf((char *)h + 136, 12, "%011o", 0);
+    h[156] = '0';
+    memcpy(h + 257, "ustar", 6);
+    memcpy(h + 263, "00", 2);
+    memset(h + 148, ' ', 8);
+    unsigned sum = 0;
+    for (int i = 0; i < 512; i++) sum += h[i];
+    snprintf((char *)h + 148, 8, "%06o", sum & 0777777u);
+    memcpy(out + 512, data, n);
+    size_t padded = (n + 511) / 512 * 512;
+    memset(out + 512 + n, 0, padded - n);
+    return 512 + padded;
+}
+
+static void test_stacks(vs_context *ctx)
+{
+    char path[1100], err[400];
+    enum { W = 9, H = 6, P = 3 };
+    /* 3-page u16 ImageJ-style TIFF */
+    uint16_t pages[P * W * H];
+    for (int i = 0; i < P * W * H; i++) pages[i] = (uint16_t)(i * 211);
+    path_of(path, sizeof path, "t_stack.tif");
+    vs_status st = vs_oiio_write_pages(path, W, H, 1, P, VS_PIX_U16, pages, 4.0, 2.0,
+                                       "ImageJ=1.53t\nimages=3\nslices=3\nunit=micron\nspacing=2.5\n",
+                                       err, sizeof err);
+    CHECK(st == VS_OK, "write tiff: %s", err);
+    vs_volume *v = load(ctx, path, NULL);
+    check_shape(v, "3-page tiff", W, H, P, VS_U16, 0.25, 0.5, 2.5, 1e-6);
+    if (v) CHECK(memcmp(vs_volume_data(v), pages, sizeof pages) == 0, "3-page tiff: data differ");
+    vs_volume_release(v);
+
+    /* folder of 8-bit PNGs in natural order: 1, 2, 10 (not 1, 10, 2) */
+    uint8_t sl[P][W * H];
+    for (int z = 0; z < P; z++)
+        for (int i = 0; i < W * H; i++) sl[z][i] = (uint8_t)(z * 80 + i);
+    path_of(path, sizeof path, "folder");
+    mkdir(path, 0755);
+    const char *fnames[P] = {"1.png", "2.png", "10.png"};
+    for (int z = 0; z < P; z++) {
+        char p[1200];
+        snprintf(p, sizeof p, "%s/%s", path, fnames[z]);
+        st = vs_oiio_write_pages(p, W, H, 1, 1, VS_PIX_U8, sl[z], 0, 0, NULL, err, sizeof err);
+        CHECK(st == VS_OK, "write png: %s", err);
+    }
+    {
+        char p[1200];
+        snprintf(p, sizeof p, "%s/README.txt", path);
+        write_bytes(p, "not a slice", 11);
+    }
+    v = load(ctx, path, NULL);
+    check_shape(v, "png folder", W, H, P, VS_U8, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), sl, sizeof sl) == 0, "png folder: order or data differ");
+    vs_volume_release(v);
+
+    /* tar of PNGs: member order is z order ("b" before "a" on purpose) */
+    unsigned char *tar = calloc(1, 64 * 1024);
+    size_t off = 0;
+    const char *members[P] = {"b.png", "a.png", "c.png"};
+    for (int z = 0; z < P; z++) {
+        char p[1200];
+        size_t n;
+        snprintf(p, sizeof p, "%s/%s", path, fnames[z]);
+        unsigned char *png = read_bytes(p, &n);
+        off += tar_add(tar + off, members[z], png, n);
+        free(png);
+    }
+    off += 1024; /* two zero blocks */
+    path_of(path, sizeof path, "t_slices.tar");
+    write_bytes(path, tar, off);
+    v = load(ctx, path, NULL);
+    check_shape(v, "png tar", W, H, P, VS_U8, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), sl, sizeof sl) == 0, "png tar: order or data differ");
+    vs_volume_release(v);
+
+    /* tar with a corrupt header: flip a name byte without fixing the checksum */
+    tar[3] ^= 0x55;
+    path_of(path, sizeof path, "corrupt_header.tar");
+    write_bytes(path, tar, off);
+    expect_fail(ctx, path, NULL, "tar corrupt header");
+    /* tar cut in the middle of a member */
+    tar[3] ^= 0x55;
+    path_of(path, sizeof path, "cut_member.tar");
+    write_bytes(path, tar, 700);
+    expect_fail(ctx, path, NULL, "tar cut after a member");
+    path_of(path, sizeof path, "cut_data.tar");
+    write_bytes(path, tar, 530);
+    expect_fail(ctx, path, NULL, "tar cut in member data");
+    path_of(path, sizeof path, "cut_header.tar");
+    write_bytes(path, tar, 300);
+    expect_fail(ctx, path, NULL, "tar cut in a header");
+    free(tar);
+
+    /* RGB slice -> Rec. 709 luminance */
+    uint8_t rgb[W * H * 3];
+    for (int i = 0; i < W * H; i++) {
+        rgb[3 * i] = 200;
+        rgb[3 * i + 1] = 100;
+        rgb[3 * i + 2] = (uint8_t)i;
+    }
+    path_of(path, sizeof path, "t_rgb.png");
+    st = vs_oiio_write_pages(path, W, H, 3, 1, VS_PIX_U8, rgb, 0, 0, NULL, err, sizeof err);
+    CHECK(st == VS_OK, "write rgb png: %s", err);
+    v = load(ctx, path, NULL);
+    check_shape(v, "rgb png", W, H, 1, VS_U8, 1, 1, 1, 0);
+    if (v) {
+        int bad = 0;
+        for (int i = 0; i < W * H; i++) {
+            double g = 0.2126 * 200 + 0.7152 * 100 + 0.0722 * i;
+            bad += ((uint8_t *)vs_volume_data(v))[i] != (uint8_t)floor(g + 0.5);
+        }
+        CHECK(bad == 0, "rgb png: %d luminance values differ", bad);
+    }
+    vs_volume_release(v);
+
+    /* slices of different sizes in a folder */
+    path_of(path, sizeof path, "mixed");
+    mkdir(path, 0755);
+    {
+        char p[1200];
+        snprintf(p, sizeof p, "%s/0.png", path);
+        vs_oiio_write_pages(p, W, H, 1, 1, VS_PIX_U8, sl[0], 0, 0, NULL, err, sizeof err);
+        snprintf(p, sizeof p, "%s/1.png", path);
+        vs_oiio_write_pages(p, H, W, 1, 1, VS_PIX_U8, sl[1], 0, 0, NULL, err, sizeof err);
+    }
+    expect_fail(ctx, path, NULL, "folder of mixed sizes");
+}
+
+/* ---- hostile input ---- */
+
+static void test_hostile(vs_context *ctx)
+{
+    char path[1100];
+    vs_load_options o;
+    vs_load_options_init(&o);
+    o.raw = 1;
+    o.dims[0] = 10;
+    o.dims[1] = 10;
+    o.dims[2] = 10;
+    o.type = VS_I16;
+    unsigned char buf[4096];
+    for (size_t i = 0; i < sizeof buf; i++) buf[i] = (unsigned char)(i * 131 + 7);
+
+    path_of(path, sizeof path, "short.raw");
+    write_bytes(path, buf, 1999);
+    expect_fail(ctx, path, &o, "raw too short");
+    CHECK(strstr(vs_last_error(ctx), "truncated") != NULL, "short raw: %s", vs_last_error(ctx));
+    path_of(path, sizeof path, "long.raw");
+    write_bytes(path, buf, 2003);
+    expect_fail(ctx, path, &o, "raw too long");
+    CHECK(strstr(vs_last_error(ctx), "3 extra bytes") != NULL, "long raw: %s", vs_last_error(ctx));
+    path_of(path, sizeof path, "short.raw.gz");
+    write_gz(path, buf, 1000);
+    expect_fail(ctx, path, &o, "raw.gz too short");
+    path_of(path, sizeof path, "long.raw.gz");
+    write_gz(path, buf, 2100);
+    expect_fail(ctx, path, &o, "raw.gz too long");
+    CHECK(strstr(vs_last_error(ctx), "100 extra bytes") != NULL, "long raw.gz: %s", vs_last_error(ctx));
+    o.dims[0] = 0;
+    path_of(path, sizeof path, "zero_dim.raw");
+    write_bytes(path, buf, 10);
+    expect_fail(ctx, path, &o, "raw zero dimension");
+    o.dims[0] = o.dims[1] = o.dims[2] = 16000;
+    path_of(path, sizeof path, "huge.raw.gz");
+    write_gz(path, buf, 4096);
+    expect_fail(ctx, path, &o, "raw.gz claiming 16000^3");
+    path_of(path, sizeof path, "noopts.raw");
+    write_bytes(path, buf, 1000);
+    expect_fail(ctx, path, NULL, "raw without options");
+
+    /* .den: truncated, huge, bad version */
+    unsigned char den[62 + 100];
+    memset(den, 0, sizeof den);
+    den[0] = 1;
+    den[50] = 10;
+    den[52] = 10;
+    den[54] = 10;
+    den[58] = 1000 & 255;
+    den[59] = 1000 >> 8;
+    path_of(path, sizeof path, "truncated.den");
+    write_bytes(path, den, sizeof den);
+    expect_fail(ctx, path, NULL, "den truncated");
+    CHECK(strstr(vs_last_error(ctx), "truncated") != NULL, "den: %s", vs_last_error(ctx));
+    den[50] = den[52] = den[54] = 60000 & 255;
+    den[51] = den[53] = den[55] = 60000 >> 8;
+    path_of(path, sizeof path, "huge.den");
+    write_bytes(path, den, sizeof den);
+    expect_fail(ctx, path, NULL, "den claiming 60000^3");
+    path_of(path, sizeof path, "short_header.den");
+    write_bytes(path, den, 30);
+    expect_fail(ctx, path, NULL, "den short header");
+
+    /* truncated .nii.gz */
+    {
+        enum { M = 40 * 40 * 40 };
+        float *p = malloc(M * sizeof(float));
+        for (int i = 0; i < M; i++) p[i] = (float)sin(i * 0.37) * 1000.0f;
+        const int d[4] = {40, 40, 40, 1};
+        const float unit[3] = {1, 1, 1};
+        path_of(path, sizeof path, "full.nii.gz");
+        write_nifti(path, 3, d, DT_F32, 32, unit, 0.0f, 0.0f, p, M * sizeof(float));
+        free(p);
+        size_t n;
+        unsigned char *b = read_bytes(path, &n);
+        CHECK(b && n > 1000, "nii.gz written");
+        path_of(path, sizeof path, "truncated.nii.gz");
+        write_bytes(path, b, n / 2);
+        expect_fail(ctx, path, NULL, "nii.gz truncated");
+        path_of(path, sizeof path, "header_only.nii.gz");
+        write_bytes(path, b, 200);
+        expect_fail(ctx, path, NULL, "nii.gz cut in header");
+        free(b);
+        /* a header claiming 30000x30000x30000 over a tiny file */
+        const int huge[4] = {30000, 30000, 30000, 1};
+        path_of(path, sizeof path, "huge.nii");
+        write_nifti(path, 3, huge, DT_U8, 8, unit, 0.0f, 0.0f, buf, 64);
+        expect_fail(ctx, path, NULL, "nii claiming 30000^3");
+        const int big[4] = {1000, 1000, 1000, 1};
+        path_of(path, sizeof path, "big.nii");
+        write_nifti(path, 3, big, DT_U8, 8, unit, 0.0f, 0.0f, buf, 64);
+        expect_fail(ctx, path, NULL, "nii claiming 1000^3");
+    }
+    /* NRRD headers claiming more than the file holds */
+    const char *nrrd_huge = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 60000 60000 60000\nencoding: raw\n\nxyz";
+    path_of(path, sizeof path, "huge.nrrd");
+    write_bytes(path, nrrd_huge, strlen(nrrd_huge));
+    expect_fail(ctx, path, NULL, "nrrd claiming 60000^3");
+    const char *nrrd_short = "NRRD0004\ntype: short\ndimension: 3\nsizes: 100 100 100\nendian: little\nencoding: raw\n\nxyz";
+    path_of(path, sizeof path, "short.nrrd");
+    write_bytes(path, nrrd_short, strlen(nrrd_short));
+    expect_fail(ctx, path, NULL, "nrrd truncated");
+    const char *nrrd_gz = "NRRD0004\ntype: float\ndimension: 3\nsizes: 100 100 100\nendian: little\nencoding: gzip\n\nxyz";
+    path_of(path, sizeof path, "badgz.nrrd");
+    write_bytes(path, nrrd_gz, strlen(nrrd_gz));
+    expect_fail(ctx, path, NULL, "nrrd bad gzip");
+
+    /* garbage with every extension, empty files, missing files */
+    static const char *const exts[] = {".nii", ".nii.gz", ".nrrd", ".nhdr", ".tif", ".png", ".tar", ".den"};
+    for (size_t i = 0; i < sizeof exts / sizeof exts[0]; i++) {
+        char name[64];
+        snprintf(name, sizeof name, "garbage%s", exts[i]);
+        path_of(path, sizeof path, name);
+        write_bytes(path, buf, sizeof buf);
+        expect_fail(ctx, path, NULL, name);
+        snprintf(name, sizeof name, "empty%s", exts[i]);
+        path_of(path, sizeof path, name);
+        write_bytes(path, buf, 0);
+        expect_fail(ctx, path, NULL, name);
+        snprintf(name, sizeof name, "missing%s", exts[i]);
+        path_of(path, sizeof path, name);
+        expect_fail(ctx, path, NULL, name);
+    }
+    vs_load_options_init(&o);
+    o.raw = 1;
+    o.dims[0] = o.dims[1] = o.dims[2] = 4;
+    path_of(path, sizeof path, "empty.raw");
+    write_bytes(path, buf, 0);
+    expect_fail(ctx, path, &o, "empty raw");
+    path_of(path, sizeof path, "missing.raw");
+    expect_fail(ctx, path, &o, "missing raw");
+    path_of(path, sizeof path, "unknown.xyz");
+    write_bytes(path, buf, 100);
+    expect_fail(ctx, path, NULL, "unknown extension");
+    path_of(path, sizeof path, "emptyfolder");
+    mkdir(path, 0755);
+    expect_fail(ctx, path, NULL, "empty folder");
+    /* a FIFO must not hang the loader */
+    path_of(path, sizeof path, "fifo.raw");
+    if (mkfifo(path, 0600) == 0) expect_fail(ctx, path, &o, "fifo");
+    /* bad spacing override */
+    vs_load_options_init(&o);
+    o.has_spacing = 1;
+    o.spacing[1] = 0.0;
+    path_of(path, sizeof path, "t.den");
+    expect_fail(ctx, path, &o, "zero spacing override");
+}
+
+int main(void)
+{
+    vs_context *ctx;
+    if (vs_context_create(&ctx) != VS_OK) return 1;
+    snprintf(tmp, sizeof tmp, "%s/vsplat_test_load_XXXXXX", tu_tmpdir());
+    if (!mkdtemp(tmp)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    printf("temporary files in %s\n", tmp);
+    test_real(ctx);
+    test_nifti(ctx);
+    test_nrrd(ctx);
+    test_raw_den(ctx);
+    test_stacks(ctx);
+    test_hostile(ctx);
+    if (!tu_failures) {
+        char cmd[1200];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
+        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmp);
+    }
+    vs_context_release(ctx);
+    TEST_DONE();
+}
