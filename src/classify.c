@@ -91,9 +91,13 @@ vs_status vs_classify_setup(vs_context *ctx, const struct vs_volume *vol, const 
         c->hi = hi;
         c->ramp = ramp;
     }
-    double pad = 0.05 * (range > 0 ? range : 1.0);
-    c->vmin = vol->vmin - pad;
-    c->vmax = vol->vmax + pad;
+    /* Reconstructed values span the data range and, at the edges of the
+     * relevant set where the kernel runs out of voxels, fall towards 0, and
+     * a normalized kernel overshoots slightly: cover all of that. */
+    double lo = vol->vmin < 0.0 ? vol->vmin : 0.0, hi = vol->vmax > 0.0 ? vol->vmax : 0.0;
+    double pad = 0.05 * (hi > lo ? hi - lo : 1.0);
+    c->vmin = lo - pad;
+    c->vmax = hi + pad;
     c->scale = (VS_TF_TABLE - 1) / (c->vmax - c->vmin);
     for (int i = 0; i < VS_TF_TABLE; i++) {
         double v = c->vmin + i / c->scale;

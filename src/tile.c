@@ -27,7 +27,9 @@ static inline int rect_empty(const rect *r) { return r->x0 >= r->x1 || r->y0 >= 
 
 /* The geometry every rasterizer shares: where one kernel section lands. */
 typedef struct section {
-    float cx, cy;   /* centre in buffer coordinates (after the depth shift) */
+    float cx, cy;   /* centre in image coordinates (after the depth shift);
+                       kept tile-independent so that every tiling computes
+                       bit-identical weights */
     float D;        /* depth integral over the slab                          */
     float E;        /* exp(-k z1^2) - exp(-k z0^2), for the z gradient splat */
 } section;
@@ -37,6 +39,7 @@ typedef struct tile_ctx {
     const vs_footprint *fp;
     int x0, y0, tw, th;  /* own pixels in image coordinates                 */
     int bw, bh;          /* buffer size: own pixels plus a one-pixel seam    */
+    int ox, oy;          /* image coordinates of buffer pixel (0,0)          */
     float ry0;           /* footprint half-height without shift              */
 } tile_ctx;
 
@@ -57,8 +60,8 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     if (fabsf(c1) >= rz) e1 = 0.0f;
     sec->D = D;
     sec->E = e1 - e0;
-    sec->cx = x - (float)(t->x0 - 1);
-    sec->cy = y - (float)(t->y0 - 1);
+    sec->cx = x;
+    sec->cy = y;
     if (fp->sheared) { /* centroid of the depth term within the slab */
         float zbar = (e0 - e1) / (2.0f * kap * D);
         sec->cx += fp->sx * zbar;
@@ -67,10 +70,11 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     return 1;
 }
 
-/* Row range of a footprint inside the buffer. */
+/* Row range of a footprint inside the buffer (buffer row y is image row
+ * y + oy, oy = y0 - 1). */
 static inline int rows_of(const tile_ctx *t, const section *sec, int *ya, int *yb)
 {
-    int a = (int)ceilf(sec->cy - t->ry0), b = (int)floorf(sec->cy + t->ry0);
+    int a = (int)ceilf(sec->cy - t->ry0) - t->oy, b = (int)floorf(sec->cy + t->ry0) - t->oy;
     if (a < 0) a = 0;
     if (b > t->bh - 1) b = t->bh - 1;
     *ya = a;
@@ -87,7 +91,7 @@ static inline int cols_of(const tile_ctx *t, const section *sec, float dy, float
     if (e >= (float)fp->emax) return 0;
     float hw = sqrtf(((float)fp->emax - e) / fp->A);
     float c = sec->cx + fp->row_shift * dy;
-    int a = (int)ceilf(c - hw), b = (int)floorf(c + hw);
+    int a = (int)ceilf(c - hw) - t->ox, b = (int)floorf(c + hw) - t->ox;
     if (a < 0) a = 0;
     if (b > t->bw - 1) b = t->bw - 1;
     *er = e;
@@ -113,12 +117,12 @@ static void raster1(const tile_ctx *t, const section *sec, float w, float *q, re
     if (!rows_of(t, sec, &ya, &yb)) return;
     w *= sec->D;
     for (int y = ya; y <= yb; y++) {
-        float dy = (float)y - sec->cy, er, cxr;
+        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
         if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
         float *row = q + (size_t)y * t->bw;
         for (int x = xa; x <= xb; x++) {
-            float dx = (float)x - cxr;
+            float dx = (float)(x + t->ox) - cxr;
             row[x] += w * vs_fp_exp(fp, er + fp->A * dx * dx);
         }
         grow(bb, xa, xb, y);
@@ -133,12 +137,12 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
     if (!rows_of(t, sec, &ya, &yb)) return;
     float w[4] = {w4[0] * sec->D, w4[1] * sec->D, w4[2] * sec->D, w4[3] * sec->D};
     for (int y = ya; y <= yb; y++) {
-        float dy = (float)y - sec->cy, er, cxr;
+        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
         if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
         float *row = buf + (size_t)y * t->bw * 4;
         for (int x = xa; x <= xb; x++) {
-            float dx = (float)x - cxr;
+            float dx = (float)(x + t->ox) - cxr;
             float h = vs_fp_exp(fp, er + fp->A * dx * dx);
             float *p = row + 4 * x;
             p[0] += w[0] * h;
@@ -163,12 +167,12 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
     float A = fp->A, B = fp->B, rk = fp->row_k;
     float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
     for (int y = ya; y <= yb; y++) {
-        float dy = (float)y - sec->cy, er, cxr;
+        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
         if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
         float *row = buf + (size_t)y * t->bw * 4;
         for (int x = xa; x <= xb; x++) {
-            float dx = (float)x - cxr;
+            float dx = (float)(x + t->ox) - cxr;
             float h = vs_fp_exp(fp, er + A * dx * dx);
             float dxs = dx + rs * dy; /* x offset from the shifted centre */
             float *p = row + 4 * x;
@@ -307,6 +311,8 @@ void vs_tile_render(void *arg, int worker, int task)
     t.th = (t.y0 + T > F->cam.height ? F->cam.height : t.y0 + T) - t.y0;
     t.bw = t.tw + 2;
     t.bh = t.th + 2;
+    t.ox = t.x0 - 1;
+    t.oy = t.y0 - 1;
     {
         double det = (double)F->fp.A * F->fp.C - (double)F->fp.B * F->fp.B;
         t.ry0 = (float)sqrt(F->fp.emax * F->fp.A / det);
