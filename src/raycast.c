@@ -1,0 +1,709 @@
+/* Reference ray caster: post-classified, Phong-shaded with the same light and
+ * material model as the splatting pipelines, one orthographic ray per pixel
+ * along +z of view space.  Three reconstructions:
+ *   analytic  - the scene's closed form, iso crossings refined by bisection
+ *               (ground truth for error measurements);
+ *   gaussian  - the exact sum of the splatting kernel b 2^(-2 r^2) over the
+ *               voxels within radius R, with its analytic derivative;
+ *   trilinear - for comparison, with central-difference gradients.
+ * Samples lie on a global grid z = k * ray_step (view units), so neighbouring
+ * rays sample consistently.  Rows are spread over plain pthreads; each pixel
+ * is computed independently, so the image is identical for any thread count. */
+#include "finish.h"
+#include "internal.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { MODE_ANALYTIC, MODE_GAUSS, MODE_TRILINEAR };
+enum { BRICK = 4, MAX_TAPS = 20 };
+
+typedef struct rc_job {
+    const struct vs_volume *vol;
+    const vs_settings *s;
+    vs_camera cam;
+    vs_classify *cls;
+    vs_light light;
+    int mode;
+    double R, R2, b;       /* kernel radius, its square, normalization      */
+    double step;           /* view units                                    */
+    double dir[3];         /* index units per view unit along the ray       */
+    double dir_len;        /* |dir|: index units per view unit              */
+    double box_lo[3], box_hi[3]; /* index box where samples are taken      */
+    int refine;            /* bisect iso crossings (analytic, iso-range)    */
+    /* empty-space skipping: brick b covers points [org + 8b, org + 8b + 8) */
+    double org;
+    int nb[3];
+    uint8_t *skip;         /* 1: no point of the brick can have opacity > 0 */
+    float *rgba;
+    atomic_int next_row, rows_done, cancel;
+} rc_job;
+
+/* ---- voxel access (outside the volume counts as 0) ---- */
+
+/* Values of row (j,k) at x = i0..i1 (all inside) into out[]. */
+static void fetch_row(const struct vs_volume *v, int j, int k, int i0, int i1, double *out)
+{
+    size_t base = ((size_t)k * v->dims[1] + j) * v->dims[0];
+    int n = i1 - i0 + 1;
+    switch (v->type) {
+    case VS_U8: {
+        const uint8_t *p = (const uint8_t *)v->data + base + i0;
+        for (int i = 0; i < n; i++) out[i] = p[i];
+    } break;
+    case VS_I16: {
+        const int16_t *p = (const int16_t *)v->data + base + i0;
+        for (int i = 0; i < n; i++) out[i] = p[i];
+    } break;
+    case VS_U16: {
+        const uint16_t *p = (const uint16_t *)v->data + base + i0;
+        for (int i = 0; i < n; i++) out[i] = p[i];
+    } break;
+    default: {
+        const float *p = (const float *)v->data + base + i0;
+        for (int i = 0; i < n; i++) out[i] = isfinite(p[i]) ? p[i] : 0.0;
+    } break;
+    }
+}
+
+static double voxel(const struct vs_volume *v, int i, int j, int k)
+{
+    if (i < 0 || j < 0 || k < 0 || i >= v->dims[0] || j >= v->dims[1] || k >= v->dims[2]) return 0.0;
+    double x = vs_volume_at(v, ((size_t)k * v->dims[1] + j) * v->dims[0] + i);
+    return isfinite(x) ? x : 0.0;
+}
+
+/* ---- Gaussian reconstruction: f(p) = b sum_j f_j 2^(-2|p-j|^2), |p-j| <= R ---- */
+static double gauss_sample(const rc_job *J, const double p[3], double g[3])
+{
+    const struct vs_volume *v = J->vol;
+    int lo[3], hi[3];
+    double d[3][MAX_TAPS], d2[3][MAX_TAPS], w[3][MAX_TAPS];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = (int)ceil(p[a] - J->R);
+        hi[a] = (int)floor(p[a] + J->R);
+        if (lo[a] < 0) lo[a] = 0;
+        if (hi[a] > v->dims[a] - 1) hi[a] = v->dims[a] - 1;
+        if (lo[a] > hi[a]) {
+            if (g) g[0] = g[1] = g[2] = 0.0;
+            return 0.0;
+        }
+        for (int i = lo[a]; i <= hi[a]; i++) {
+            double t = p[a] - i;
+            d[a][i - lo[a]] = t;
+            d2[a][i - lo[a]] = t * t;
+            w[a][i - lo[a]] = exp2(-2.0 * t * t); /* separable factor */
+        }
+    }
+    double row[MAX_TAPS];
+    double sum = 0.0, sx = 0.0, sy = 0.0, sz = 0.0;
+    for (int k = lo[2]; k <= hi[2]; k++) {
+        int kk = k - lo[2];
+        double rz = J->R2 - d2[2][kk];
+        if (rz < 0.0) continue;
+        for (int j = lo[1]; j <= hi[1]; j++) {
+            int jj = j - lo[1];
+            double ry = rz - d2[1][jj];
+            if (ry < 0.0) continue;
+            double wyz = w[1][jj] * w[2][kk];
+            fetch_row(v, j, k, lo[0], hi[0], row);
+            double rs = 0.0, rx = 0.0;
+            for (int i = 0; i <= hi[0] - lo[0]; i++) {
+                if (d2[0][i] > ry) continue;
+                double fw = row[i] * w[0][i];
+                rs += fw;
+                rx += fw * d[0][i];
+            }
+            sum += rs * wyz;
+            if (g) {
+                sx += rx * wyz;
+                sy += rs * wyz * d[1][jj];
+                sz += rs * wyz * d[2][kk];
+            }
+        }
+    }
+    if (g) {
+        /* d/dp_a 2^(-2|p-j|^2) = -4 ln2 (p_a - j_a) 2^(-2|p-j|^2) */
+        double c = -4.0 * M_LN2 * J->b;
+        g[0] = c * sx;
+        g[1] = c * sy;
+        g[2] = c * sz;
+    }
+    return J->b * sum;
+}
+
+/* ---- trilinear reconstruction, gradients: central differences at the grid
+ * points, interpolated trilinearly ---- */
+static double trilinear_sample(const rc_job *J, const double p[3], double g[3])
+{
+    const struct vs_volume *v = J->vol;
+    int i0[3];
+    double f[3];
+    for (int a = 0; a < 3; a++) {
+        double fl = floor(p[a]);
+        i0[a] = (int)fl;
+        f[a] = p[a] - fl;
+    }
+    if (!g) {
+        double val = 0.0;
+        for (int c = 0; c < 8; c++) {
+            int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
+            double wt = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+            if (wt != 0.0) val += wt * voxel(v, i0[0] + dx, i0[1] + dy, i0[2] + dz);
+        }
+        return val;
+    }
+    double win[4][4][4]; /* voxels i0-1 .. i0+2 */
+    for (int z = 0; z < 4; z++)
+        for (int y = 0; y < 4; y++)
+            for (int x = 0; x < 4; x++) win[z][y][x] = voxel(v, i0[0] - 1 + x, i0[1] - 1 + y, i0[2] - 1 + z);
+    double val = 0.0;
+    g[0] = g[1] = g[2] = 0.0;
+    for (int c = 0; c < 8; c++) {
+        int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
+        double wt = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+        int x = 1 + dx, y = 1 + dy, z = 1 + dz;
+        val += wt * win[z][y][x];
+        g[0] += wt * 0.5 * (win[z][y][x + 1] - win[z][y][x - 1]);
+        g[1] += wt * 0.5 * (win[z][y + 1][x] - win[z][y - 1][x]);
+        g[2] += wt * 0.5 * (win[z + 1][y][x] - win[z - 1][y][x]);
+    }
+    return val;
+}
+
+static double sample_value(const rc_job *J, const double p[3])
+{
+    switch (J->mode) {
+    case MODE_ANALYTIC: return J->vol->analytic.f(J->vol->analytic.params, p);
+    case MODE_GAUSS: return gauss_sample(J, p, NULL);
+    default: return trilinear_sample(J, p, NULL);
+    }
+}
+
+static void sample_gradient(const rc_job *J, const double p[3], double g[3])
+{
+    switch (J->mode) {
+    case MODE_ANALYTIC: J->vol->analytic.grad(J->vol->analytic.params, p, g); break;
+    case MODE_GAUSS: gauss_sample(J, p, g); break;
+    default: trilinear_sample(J, p, g); break;
+    }
+}
+
+static int in_iso_range(const vs_classify *c, double v) { return v >= c->lo && v <= c->hi; }
+
+/* ---- one ray ---- */
+static void cast_ray(const rc_job *J, int px, int py, double acc[4])
+{
+    const vs_settings *s = J->s;
+    const vs_camera *cam = &J->cam;
+    acc[0] = acc[1] = acc[2] = acc[3] = 0.0;
+    const double v0[3] = {px, py, 0.0};
+    double p0[3];
+    vs_camera_view_to_index(cam, v0, p0);
+    /* clip the ray against the sample box (slab test), in view-z units */
+    double t0 = -INFINITY, t1 = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        double d = J->dir[a];
+        if (fabs(d) < 1e-15) {
+            if (p0[a] < J->box_lo[a] || p0[a] > J->box_hi[a]) return;
+            continue;
+        }
+        double ta = (J->box_lo[a] - p0[a]) / d, tb = (J->box_hi[a] - p0[a]) / d;
+        if (ta > tb) {
+            double t = ta;
+            ta = tb;
+            tb = t;
+        }
+        if (ta > t0) t0 = ta;
+        if (tb < t1) t1 = tb;
+    }
+    if (!(t0 <= t1)) return;
+    long k0 = (long)ceil(t0 / J->step), k1 = (long)floor(t1 / J->step);
+    const double *gs = J->vol->spacing;
+    double A = 0.0, C[3] = {0.0, 0.0, 0.0};
+    int have_prev = 0, prev_in = 0;
+    double z_prev = 0.0;
+    for (long k = k0; k <= k1; k++) {
+        double z = k * J->step;
+        double p[3] = {p0[0] + z * J->dir[0], p0[1] + z * J->dir[1], p0[2] + z * J->dir[2]};
+        if (J->skip) {
+            int b[3];
+            for (int a = 0; a < 3; a++) {
+                b[a] = (int)floor((p[a] - J->org) / BRICK);
+                if (b[a] < 0) b[a] = 0;
+                if (b[a] > J->nb[a] - 1) b[a] = J->nb[a] - 1;
+            }
+            if (J->skip[((size_t)b[2] * J->nb[1] + b[1]) * J->nb[0] + b[0]]) {
+                /* jump to the first grid sample past the brick's exit */
+                double texit = INFINITY;
+                for (int a = 0; a < 3; a++) {
+                    double d = J->dir[a];
+                    if (fabs(d) < 1e-15) continue;
+                    double plane = J->org + BRICK * (b[a] + (d > 0 ? 1 : 0));
+                    double t = (plane - p0[a]) / d;
+                    if (t < texit) texit = t;
+                }
+                long kn = (long)floor(texit / J->step) + 1;
+                k = (kn > k + 1 ? kn : k + 1) - 1;
+                have_prev = 0;
+                continue;
+            }
+        }
+        double val = sample_value(J, p);
+        float rgb[3], alpha;
+        vs_classify_eval(J->cls, s, val, rgb, &alpha);
+        double ps[3] = {p[0], p[1], p[2]}; /* where this sample is shaded */
+        int in = J->refine ? in_iso_range(J->cls, val) : 0;
+        if (J->refine && have_prev && in && !prev_in) {
+            /* The iso crossing lies in (z_prev, z]: bisect to 1e-4 voxel and
+             * shade there, so the normal is that of the true surface. */
+            double za = z_prev, zb = z;
+            while ((zb - za) * J->dir_len > 1e-4) {
+                double zm = 0.5 * (za + zb);
+                double pm[3] = {p0[0] + zm * J->dir[0], p0[1] + zm * J->dir[1], p0[2] + zm * J->dir[2]};
+                if (in_iso_range(J->cls, sample_value(J, pm)))
+                    zb = zm;
+                else
+                    za = zm;
+            }
+            for (int a = 0; a < 3; a++) ps[a] = p0[a] + zb * J->dir[a];
+        }
+        have_prev = 1;
+        prev_in = in;
+        z_prev = z;
+        if (!(alpha > 0.0f)) continue;
+        double op = vs_opacity_correct(alpha, J->step);
+        double g[3], gw[3], n[3], diff, spec;
+        sample_gradient(J, ps, g);
+        for (int a = 0; a < 3; a++) gw[a] = g[a] / gs[a];
+        n[0] = gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2];
+        n[1] = -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]);
+        n[2] = gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2];
+        vs_light_eval(&J->light, n, &diff, &spec);
+        double w = (1.0 - A) * op;
+        for (int c = 0; c < 3; c++) C[c] += w * (rgb[c] * diff + spec);
+        A += w;
+        if (A > 0.999) break; /* early ray termination */
+    }
+    acc[0] = C[0];
+    acc[1] = C[1];
+    acc[2] = C[2];
+    acc[3] = A;
+}
+
+static void render_row(rc_job *J, int y)
+{
+    const float *bg = J->s->background;
+    float *out = J->rgba + (size_t)4 * y * J->cam.width;
+    for (int x = 0; x < J->cam.width; x++) {
+        double acc[4];
+        cast_ray(J, x, y, acc);
+        const float af[4] = {(float)acc[0], (float)acc[1], (float)acc[2], (float)acc[3]};
+        vs_finish_pixel(af, bg, out + 4 * x);
+    }
+}
+
+typedef struct rc_worker {
+    rc_job *job;
+    int is_caller;   /* reports progress (the thread that called vs_render) */
+    double ms;       /* busy time */
+    pthread_t tid;
+} rc_worker;
+
+static void *worker_main(void *arg)
+{
+    rc_worker *w = arg;
+    rc_job *J = w->job;
+    const vs_settings *s = J->s;
+    double t = vs_now_ms();
+    for (;;) {
+        if (atomic_load(&J->cancel)) break;
+        int y = atomic_fetch_add(&J->next_row, 1);
+        if (y >= J->cam.height) break;
+        render_row(J, y);
+        int done = atomic_fetch_add(&J->rows_done, 1) + 1;
+        if (w->is_caller && s->progress &&
+            s->progress(s->progress_user, (double)done / J->cam.height) != 0)
+            atomic_store(&J->cancel, 1);
+    }
+    w->ms = vs_now_ms() - t;
+    return NULL;
+}
+
+/* ---- empty-space skipping ---- */
+
+/* Bounds of the kernel weight sum W(p) = b sum_{|p-j|<=R} 2^(-2|p-j|^2) over
+ * the unit cell, with a margin: reconstructed values lie in
+ * [min(m Wmin, m Wmax), max(M Wmin, M Wmax)] for voxel values in [m, M]. */
+static void gauss_weight_bounds(const rc_job *J, double *wmin, double *wmax)
+{
+    double lo = INFINITY, hi = 0.0;
+    const int steps = 8;
+    int r = (int)ceil(J->R) + 1;
+    for (int sz = 0; sz < steps; sz++)
+        for (int sy = 0; sy < steps; sy++)
+            for (int sx = 0; sx < steps; sx++) {
+                double p[3] = {(double)sx / steps, (double)sy / steps, (double)sz / steps};
+                double sum = 0.0;
+                for (int k = -r; k <= r + 1; k++)
+                    for (int j = -r; j <= r + 1; j++)
+                        for (int i = -r; i <= r + 1; i++) {
+                            double d2 = (p[0] - i) * (p[0] - i) + (p[1] - j) * (p[1] - j) + (p[2] - k) * (p[2] - k);
+                            if (d2 <= J->R2) sum += exp2(-2.0 * d2);
+                        }
+                sum *= J->b;
+                if (sum < lo) lo = sum;
+                if (sum > hi) hi = sum;
+            }
+    *wmin = 0.98 * lo;
+    *wmax = 1.02 * hi;
+}
+
+/* Voxel interval [lo, hi] that the points of brick b depend on along one
+ * axis (dilated by dil, clipped); *zero set if it reaches outside. */
+static void brick_interval(const rc_job *J, int b, double dil, int n, int *lo, int *hi, uint8_t *zero)
+{
+    double x0 = J->org + (double)BRICK * b, x1 = x0 + BRICK;
+    *lo = (int)ceil(x0 - dil);
+    *hi = (int)floor(x1 + dil);
+    *zero = 0;
+    if (*lo < 0) {
+        *lo = 0;
+        *zero = 1;
+    }
+    if (*hi > n - 1) {
+        *hi = n - 1;
+        *zero = 1;
+    }
+}
+
+/* A tighter bound for the Gaussian reconstruction, which the min-max range
+ * cannot give for noisy data (one bright speckle voxel makes its whole
+ * neighbourhood "relevant" although b * 2^0 * speckle stays far below the
+ * iso-value).  For p in the unit cell c, |p - (c+o)| along an axis is at
+ * least dist(o) = max(0, -o, o-1), so
+ *     f(p) <= b sum_o w(o_x) w(o_y) w(o_z) f+(c+o),  w(o) = 2^(-2 dist(o)^2),
+ * a separable filter.  The same with f- bounds f from below.  We filter
+ * slice by slice (x, y), keep a ring of slices for z, and take each brick's
+ * maximum: hi[] bounds f+ terms, neg[] the f- terms. */
+static vs_status gauss_brick_bounds(vs_context *ctx, const rc_job *J, float *hi, float *neg)
+{
+    const struct vs_volume *v = J->vol;
+    const int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
+    const int olo = -(int)ceil(J->R), ohi = (int)ceil(J->R) + 1, nt = ohi - olo + 1;
+    const int org = (int)J->org;
+    const int ncx = BRICK * J->nb[0], ncy = BRICK * J->nb[1], ncz = BRICK * J->nb[2];
+    double w1[2 * 8 + 3];
+    for (int o = olo; o <= ohi; o++) {
+        double d = o < 0 ? -o : o > 1 ? o - 1 : 0;
+        w1[o - olo] = d > J->R ? 0.0 : exp2(-2.0 * d * d);
+    }
+    double wz[2 * 8 + 3]; /* the normalization b, once: in the z taps */
+    for (int t = 0; t < nt; t++) wz[t] = J->b * w1[t];
+    double *row = malloc(sizeof(double) * (size_t)nx);
+    double *tmp = malloc(sizeof(double) * (size_t)ncx * ny);
+    float *ring = malloc(sizeof(float) * (size_t)nt * ncx * ncy);
+    if (!row || !tmp || !ring) {
+        free(row);
+        free(tmp);
+        free(ring);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory for the kernel bound");
+    }
+    size_t nbr = (size_t)J->nb[0] * J->nb[1] * J->nb[2];
+    int passes = v->vmin < 0.0 ? 2 : 1;
+    for (size_t i = 0; i < nbr; i++) hi[i] = neg[i] = 0.0f;
+    for (int pass = 0; pass < passes; pass++) {
+        float *out = pass == 0 ? hi : neg;
+        int have = -1; /* highest slice k filtered into the ring */
+        for (int czi = 0; czi < ncz; czi++) {
+            int cz = org + czi;
+            int kmax = cz + ohi < nz - 1 ? cz + ohi : nz - 1;
+            for (int k = have + 1; k <= kmax; k++) {
+                for (int j = 0; j < ny; j++) {
+                    fetch_row(v, j, k, 0, nx - 1, row);
+                    for (int i = 0; i < nx; i++) {
+                        double x = pass == 0 ? row[i] : -row[i];
+                        row[i] = x > 0.0 ? x : 0.0;
+                    }
+                    double *t = tmp + (size_t)j * ncx;
+                    for (int cxi = 0; cxi < ncx; cxi++) {
+                        int cx = org + cxi;
+                        double acc = 0.0;
+                        for (int o = olo; o <= ohi; o++) {
+                            int i = cx + o;
+                            if (i >= 0 && i < nx) acc += w1[o - olo] * row[i];
+                        }
+                        t[cxi] = acc;
+                    }
+                }
+                float *sl = ring + (size_t)(k % nt) * ncx * ncy;
+                for (int cyi = 0; cyi < ncy; cyi++) {
+                    int cy = org + cyi;
+                    float *d = sl + (size_t)cyi * ncx;
+                    for (int cxi = 0; cxi < ncx; cxi++) d[cxi] = 0.0f;
+                    for (int o = olo; o <= ohi; o++) {
+                        int j = cy + o;
+                        if (j < 0 || j >= ny) continue;
+                        const double *t = tmp + (size_t)j * ncx;
+                        for (int cxi = 0; cxi < ncx; cxi++) d[cxi] += (float)(w1[o - olo] * t[cxi]);
+                    }
+                }
+                have = k;
+            }
+            int kmin = cz + olo > 0 ? cz + olo : 0;
+            if (kmin > kmax) continue; /* no voxel slice reaches this cell layer */
+            size_t bzo = (size_t)(czi / BRICK) * J->nb[1];
+            for (int cyi = 0; cyi < ncy; cyi++) {
+                float *ob = out + (bzo + cyi / BRICK) * J->nb[0];
+                for (int cxi = 0; cxi < ncx; cxi++) {
+                    double acc = 0.0;
+                    for (int k = kmin; k <= kmax; k++)
+                        acc += wz[k - cz - olo] * ring[((size_t)(k % nt) * ncy + cyi) * ncx + cxi];
+                    /* round up: float sums above must not understate the bound */
+                    float f = (float)(acc * (1.0 + 1e-5) + 1e-30);
+                    if (f > ob[cxi / BRICK]) ob[cxi / BRICK] = f;
+                }
+            }
+        }
+    }
+    free(row);
+    free(tmp);
+    free(ring);
+    return VS_OK;
+}
+
+/* Value range of every brick's dependency region, by separable min/max
+ * passes along x, y, z (about 3 reads per voxel), then the skip flags. */
+static vs_status build_skip(vs_context *ctx, rc_job *J)
+{
+    const struct vs_volume *v = J->vol;
+    const int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
+    double dil = J->mode == MODE_GAUSS ? J->R : 1.0; /* voxels a point depends on */
+    J->org = -ceil(J->R) - 1.0;
+    for (int a = 0; a < 3; a++) J->nb[a] = (int)ceil((v->dims[a] - 1 + J->R - J->org) / BRICK) + 1;
+    const int bx = J->nb[0], by = J->nb[1], bz = J->nb[2];
+    size_t nbr = (size_t)bx * by * bz;
+    int *iv = malloc(sizeof(int) * 2 * (size_t)(bx + by + bz));
+    uint8_t *zf = malloc((size_t)(bx + by + bz));
+    float *amin = malloc(sizeof(float) * (size_t)nz * ny * bx), *amax = malloc(sizeof(float) * (size_t)nz * ny * bx);
+    float *cmin = malloc(sizeof(float) * (size_t)nz * by * bx), *cmax = malloc(sizeof(float) * (size_t)nz * by * bx);
+    double *row = malloc(sizeof(double) * (size_t)nx);
+    J->skip = malloc(nbr);
+    if (!iv || !zf || !amin || !amax || !cmin || !cmax || !row || !J->skip) {
+        free(iv); free(zf); free(amin); free(amax); free(cmin); free(cmax); free(row); free(J->skip);
+        J->skip = NULL;
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory for the brick grid");
+    }
+    int *ix = iv, *iy = iv + 2 * bx, *iz = iv + 2 * (bx + by);
+    uint8_t *zx = zf, *zy = zf + bx, *zz = zf + bx + by;
+    for (int b = 0; b < bx; b++) brick_interval(J, b, dil, nx, &ix[2 * b], &ix[2 * b + 1], &zx[b]);
+    for (int b = 0; b < by; b++) brick_interval(J, b, dil, ny, &iy[2 * b], &iy[2 * b + 1], &zy[b]);
+    for (int b = 0; b < bz; b++) brick_interval(J, b, dil, nz, &iz[2 * b], &iz[2 * b + 1], &zz[b]);
+    /* x pass: per voxel row and x-brick (empty interval -> +inf/-inf) */
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++) {
+            fetch_row(v, j, k, 0, nx - 1, row);
+            float *mn = amin + ((size_t)k * ny + j) * bx, *mx = amax + ((size_t)k * ny + j) * bx;
+            for (int b = 0; b < bx; b++) {
+                double lo = INFINITY, hi = -INFINITY;
+                for (int i = ix[2 * b]; i <= ix[2 * b + 1]; i++) {
+                    if (row[i] < lo) lo = row[i];
+                    if (row[i] > hi) hi = row[i];
+                }
+                mn[b] = (float)lo;
+                mx[b] = (float)hi;
+            }
+        }
+    /* y pass */
+    for (int k = 0; k < nz; k++)
+        for (int b = 0; b < by; b++) {
+            float *mn = cmin + ((size_t)k * by + b) * bx, *mx = cmax + ((size_t)k * by + b) * bx;
+            for (int x = 0; x < bx; x++) {
+                mn[x] = INFINITY;
+                mx[x] = -INFINITY;
+            }
+            for (int j = iy[2 * b]; j <= iy[2 * b + 1]; j++) {
+                const float *smn = amin + ((size_t)k * ny + j) * bx, *smx = amax + ((size_t)k * ny + j) * bx;
+                for (int x = 0; x < bx; x++) {
+                    if (smn[x] < mn[x]) mn[x] = smn[x];
+                    if (smx[x] > mx[x]) mx[x] = smx[x];
+                }
+            }
+        }
+    /* z pass, then classify the range */
+    double wmin = 1.0, wmax = 1.0;
+    float *kb_hi = NULL, *kb_neg = NULL;
+    if (J->mode == MODE_GAUSS) {
+        gauss_weight_bounds(J, &wmin, &wmax);
+        kb_hi = malloc(sizeof(float) * nbr);
+        kb_neg = malloc(sizeof(float) * nbr);
+        vs_status st = kb_hi && kb_neg ? gauss_brick_bounds(ctx, J, kb_hi, kb_neg)
+                                       : vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory");
+        if (st != VS_OK) {
+            free(kb_hi); free(kb_neg);
+            free(iv); free(zf); free(amin); free(amax); free(cmin); free(cmax); free(row); free(J->skip);
+            J->skip = NULL;
+            return st;
+        }
+    }
+    const vs_classify *c = J->cls;
+    for (int b = 0; b < bz; b++)
+        for (int y = 0; y < by; y++)
+            for (int x = 0; x < bx; x++) {
+                double m = INFINITY, M = -INFINITY;
+                for (int k = iz[2 * b]; k <= iz[2 * b + 1]; k++) {
+                    size_t i = ((size_t)k * by + y) * bx + x;
+                    if (cmin[i] < m) m = cmin[i];
+                    if (cmax[i] > M) M = cmax[i];
+                }
+                if (zx[x] || zy[y] || zz[b]) { /* voxels outside count as 0 */
+                    if (m > 0.0) m = 0.0;
+                    if (M < 0.0) M = 0.0;
+                }
+                double vlo = fmin(m * wmin, m * wmax), vhi = fmax(M * wmin, M * wmax);
+                size_t bi = ((size_t)b * by + y) * bx + x;
+                if (kb_hi) {
+                    vhi = fmin(vhi, kb_hi[bi]);
+                    vlo = fmax(vlo, -(double)kb_neg[bi]);
+                }
+                J->skip[bi] = (uint8_t)(vhi < c->alpha_lo || vlo > c->alpha_hi);
+            }
+    free(kb_hi); free(kb_neg);
+    free(iv); free(zf); free(amin); free(amax); free(cmin); free(cmax); free(row);
+    return VS_OK;
+}
+
+/* ---- entry ---- */
+vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const vs_settings *s,
+                            vs_image *out, vs_stats *st)
+{
+    if (!vol || !s || !out)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: NULL %s",
+                            !vol ? "volume" : !s ? "settings" : "output image");
+    out->width = out->height = 0;
+    out->rgba = NULL;
+    if (!vol->data) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: volume has no data");
+    if (!(s->ray_step >= 1e-4) || !isfinite(s->ray_step) || s->ray_step > 1e4)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: ray step %g must lie in [1e-4, 1e4]",
+                            s->ray_step);
+    if (!(s->kernel_radius > 0.0) || !(s->kernel_radius <= 8.0))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: kernel radius %g must lie in (0, 8]",
+                            s->kernel_radius);
+    if (s->threads < 0)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: thread count %d is negative", s->threads);
+    if (s->background[3] < 0.0f || s->background[3] > 1.0f || !isfinite(s->background[0]) ||
+        !isfinite(s->background[1]) || !isfinite(s->background[2]))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: background must be finite with alpha in [0,1]");
+    double t_start = vs_now_ms();
+
+    rc_job *J = calloc(1, sizeof *J);
+    vs_classify *cls = malloc(sizeof *cls);
+    if (!J || !cls) {
+        free(J);
+        free(cls);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory");
+    }
+    vs_status rc = vs_camera_setup(ctx, vol, s, &J->cam);
+    if (rc == VS_OK) rc = vs_classify_setup(ctx, vol, s, cls);
+    if (rc != VS_OK) {
+        free(J);
+        free(cls);
+        return rc;
+    }
+    J->vol = vol;
+    J->s = s;
+    J->cls = cls;
+    vs_light_setup(s, &J->cam, &J->light);
+    J->mode = (s->ray_analytic && vol->has_analytic) ? MODE_ANALYTIC
+              : s->ray_trilinear                     ? MODE_TRILINEAR
+                                                     : MODE_GAUSS;
+    J->R = s->kernel_radius;
+    J->R2 = J->R * J->R;
+    J->b = vs_kernel_b(J->R);
+    J->step = s->ray_step;
+    J->refine = J->mode == MODE_ANALYTIC && !cls->use_points;
+    for (int a = 0; a < 3; a++) {
+        J->dir[a] = J->cam.Minv[a][2]; /* d index / d view-z */
+        J->box_lo[a] = -J->R;
+        J->box_hi[a] = vol->dims[a] - 1 + J->R;
+    }
+    J->dir_len = sqrt(J->dir[0] * J->dir[0] + J->dir[1] * J->dir[1] + J->dir[2] * J->dir[2]);
+    if (J->mode != MODE_ANALYTIC) {
+        rc = build_skip(ctx, J);
+        if (rc != VS_OK) {
+            free(cls);
+            free(J);
+            return rc;
+        }
+    }
+    size_t npix = (size_t)J->cam.width * J->cam.height;
+    J->rgba = malloc(npix * 4 * sizeof(float));
+    if (!J->rgba) {
+        vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: cannot allocate a %dx%d image", J->cam.width,
+                     J->cam.height);
+        free(J->skip);
+        free(cls);
+        free(J);
+        return VS_ERR_OUT_OF_MEMORY;
+    }
+    atomic_init(&J->next_row, 0);
+    atomic_init(&J->rows_done, 0);
+    atomic_init(&J->cancel, 0);
+
+    int nthreads = s->threads == 0 ? 2 : s->threads;
+    if (nthreads > 256) nthreads = 256;
+    if (nthreads > J->cam.height) nthreads = J->cam.height;
+    rc_worker *w = calloc((size_t)nthreads, sizeof *w);
+    if (!w) {
+        free(J->rgba);
+        free(J->skip);
+        free(cls);
+        free(J);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory");
+    }
+    int started = 1;
+    for (int i = 1; i < nthreads; i++) {
+        w[i].job = J;
+        if (pthread_create(&w[i].tid, NULL, worker_main, &w[i]) != 0) break; /* run with fewer */
+        started++;
+    }
+    w[0].job = J;
+    w[0].is_caller = 1;
+    worker_main(&w[0]);
+    double ms_threads = w[0].ms;
+    for (int i = 1; i < started; i++) {
+        pthread_join(w[i].tid, NULL);
+        ms_threads += w[i].ms;
+    }
+    free(w);
+    int cancelled = atomic_load(&J->cancel);
+    free(J->skip);
+    if (cancelled) {
+        free(J->rgba);
+        free(cls);
+        free(J);
+        return vs_set_error(ctx, VS_ERR_CANCELLED, "raycast: cancelled by the progress callback");
+    }
+    out->width = J->cam.width;
+    out->height = J->cam.height;
+    out->rgba = J->rgba;
+    if (st) {
+        memset(st, 0, sizeof *st);
+        st->pipeline = "raycast";
+        st->isa = "scalar";
+        st->threads = started;
+        st->width = out->width;
+        st->height = out->height;
+        st->voxels_total = (uint64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
+        st->ms_stage.shade = ms_threads; /* summed over threads */
+        st->iso_lo = cls->lo;
+        st->iso_hi = cls->hi;
+        st->ramp = cls->ramp;
+        st->ms_total = vs_now_ms() - t_start;
+    }
+    free(cls);
+    free(J);
+    return VS_OK;
+}
