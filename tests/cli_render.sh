@@ -96,6 +96,16 @@ expect_ok "--iso 1e9" render "${SCENE[@]}" --iso 1e9 -o blank.png
 expect_file blank.png "--iso 1e9"
 expect_err "note" "--iso 1e9 prints a note"
 
+# every pipeline renders something (not the blank image) and names itself in the stats
+for p in pre post-cd post-gs post-alpha raycast; do
+    expect_ok "render --pipeline $p" render --scene sphere:24 --size 64x64 --pipeline "$p" -q --stats "$p.json" -o "$p.png"
+    expect_file "$p.png" "render --pipeline $p"
+    if grep -Eq "\"pipeline\": *\"$p\"" "$p.json"; then ok; else bad "$p: stats name another pipeline"; fi
+    run compare blank.png "$p.png"
+    max=$(sed -n 's/.*max=\([^ ]*\)$/\1/p' "$T/out")
+    if [[ $rc -eq 0 ]] && awk -v m="$max" 'BEGIN { exit !(m > 0.1) }'; then ok; else bad "$p: image is blank (max=$max)"; fi
+done
+
 # compare
 expect_ok "compare identical" compare a.png a.png
 expect_out '^rmse=[^ ]+ psnr=[^ ]+ ssim=[^ ]+ max=[^ ]+$' "compare format"

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Build vsplat and run every test: tools/test.sh
 # Exits non-zero if the build or any test fails.
+# (build folder: $VSPLAT_BUILD_DIR, default build/)
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-BUILD=$ROOT/build
+BUILD=${VSPLAT_BUILD_DIR:-$ROOT/build}
 
 "$ROOT/tools/build.sh" "$BUILD"
 ctest --test-dir "$BUILD" --output-on-failure -j2

@@ -141,6 +141,7 @@ static void print_stats_table(const vs_stats *st)
     printf("%-22s %12.3f\n", "relevant-voxel list", st->ms_relevant);
     printf("%-22s %12.3f\n", "total (wall clock)", st->ms_total);
     if (st->pin_warning) printf("note: binding workers to cores failed\n");
+    fflush(stdout); /* keep the table ahead of later stderr lines */
 }
 
 /* ---- subcommands ---- */
