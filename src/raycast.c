@@ -204,6 +204,7 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
     vs_camera_view_to_index(cam, v0, p0);
     /* clip the ray against the sample box (slab test), in view-z units */
     double t0 = -INFINITY, t1 = INFINITY;
+    int entry_axis = -1;
     for (int a = 0; a < 3; a++) {
         double d = J->dir[a];
         if (fabs(d) < 1e-15) {
@@ -216,15 +217,27 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
             ta = tb;
             tb = t;
         }
-        if (ta > t0) t0 = ta;
+        if (ta > t0) {
+            t0 = ta;
+            entry_axis = a;
+        }
         if (tb < t1) t1 = tb;
     }
     if (!(t0 <= t1)) return;
     long k0 = (long)ceil(t0 / J->step), k1 = (long)floor(t1 / J->step);
     const double *gs = J->vol->spacing;
     double A = 0.0, C[3] = {0.0, 0.0, 0.0};
-    int have_prev = 0, prev_in = 0;
-    double z_prev = 0.0;
+    int have_prev = 0, prev_in = 0, wall = 0;
+    double z_prev = 0.0, pe[3] = {0.0, 0.0, 0.0};
+    if (J->refine && entry_axis >= 0) {
+        /* The analytic domain ends at the volume's faces: a ray entering it
+         * inside the iso-range sees a cut wall, shaded with the face normal. */
+        for (int a = 0; a < 3; a++) pe[a] = p0[a] + t0 * J->dir[a];
+        prev_in = in_iso_range(J->cls, sample_value(J, pe));
+        have_prev = 1;
+        z_prev = t0;
+        wall = prev_in;
+    }
     for (long k = k0; k <= k1; k++) {
         double z = k * J->step;
         double p[3] = {p0[0] + z * J->dir[0], p0[1] + z * J->dir[1], p0[2] + z * J->dir[2]};
@@ -273,10 +286,17 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
         have_prev = 1;
         prev_in = in;
         z_prev = z;
+        int at_wall = wall;
+        wall = 0;
         if (!(alpha > 0.0f)) continue;
         double op = vs_opacity_correct(alpha, J->step);
         double g[3], gw[3], n[3], diff, spec;
-        sample_gradient(J, ps, g);
+        if (at_wall) { /* inward face normal: into the dense region */
+            g[0] = g[1] = g[2] = 0.0;
+            g[entry_axis] = J->dir[entry_axis] > 0 ? 1.0 : -1.0;
+        } else {
+            sample_gradient(J, ps, g);
+        }
         for (int a = 0; a < 3; a++) gw[a] = g[a] / gs[a];
         n[0] = gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2];
         n[1] = -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]);
@@ -626,8 +646,13 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
     J->refine = J->mode == MODE_ANALYTIC && !cls->use_points;
     for (int a = 0; a < 3; a++) {
         J->dir[a] = J->cam.Minv[a][2]; /* d index / d view-z */
-        J->box_lo[a] = -J->R;
-        J->box_hi[a] = vol->dims[a] - 1 + J->R;
+        /* Sampled data reaches R beyond the outer voxels.  An analytic
+         * function is defined everywhere; we cut it where the voxels end
+         * (half a voxel beyond the outer ones, like the cube's edge) so that
+         * it describes the same finite object as the volume. */
+        double ext = J->mode == MODE_ANALYTIC ? 0.5 : J->R;
+        J->box_lo[a] = -ext;
+        J->box_hi[a] = vol->dims[a] - 1 + ext;
     }
     J->dir_len = sqrt(J->dir[0] * J->dir[0] + J->dir[1] * J->dir[1] + J->dir[2] * J->dir[2]);
     if (J->mode != MODE_ANALYTIC) {

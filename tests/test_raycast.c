@@ -104,6 +104,14 @@ int main(void)
             im = &sharp;
         }
         if (!im->rgba) continue;
+        if (pass == 1) {
+            double ra, rr;
+            silhouette(im, &ra, &rr);
+            printf("silhouette radius (ramp 0.001): area %.3f (err %+.3f), row crossings %.3f (err %+.3f)\n", ra,
+                   ra - R_px, rr, rr - R_px);
+            /* alpha is binary here, so row crossings are quantized to half a pixel: use the area */
+            CHECK(fabs(ra - R_px) < 0.5, "sharp radius %.3f vs %.3f", ra, R_px);
+        }
         double worst = 0.0, worst_r = 0.0, sum = 0.0;
         int count = 0;
         for (int y = 0; y < s.height; y++)
@@ -252,6 +260,22 @@ int main(void)
     if (render(ctx, sph, &s, &img, &st))
         printf("speed: gaussian sphere 64^3 at 512^2, %d threads: %.0f ms\n", st.threads, vs_now_ms() - t);
     vs_image_free(&img);
+    vs_volume *cell = NULL;
+    if (vs_volume_scene(ctx, "cell", &cell) == VS_OK) {
+        s.width = s.height = 256;
+        s.azimuth = 30;
+        s.elevation = 40;
+        t = vs_now_ms();
+        if (render(ctx, cell, &s, &img, &st)) {
+            double cov = 0.0;
+            for (int i = 0; i < 256 * 256; i++) cov += img.rgba[4 * i + 3];
+            printf("speed: gaussian cell 512x512x76 at 256^2, %d threads: %.0f ms (coverage %.1f%%)\n", st.threads,
+                   vs_now_ms() - t, 100.0 * cov / (256 * 256));
+            CHECK(cov > 0.01 * 256 * 256, "the cell is visible");
+        }
+        vs_image_free(&img);
+        vs_volume_release(cell);
+    }
 
     vs_image_free(&ana);
     vs_volume_release(sph);
