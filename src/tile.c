@@ -230,6 +230,62 @@ static void clear_rect(float *buf, int bw, int ch, const rect *r)
         memset(buf + ((size_t)y * bw + r->x0) * ch, 0, (size_t)(r->x1 - r->x0) * ch * sizeof(float));
 }
 
+/* The voxels of a tile whose kernels overlap the current sheet, in
+ * (first sheet, voxel) order so every tiling sums in the same order. */
+typedef struct active_list {
+    const uint32_t *ent; /* the tile's voxel indices                       */
+    int n;
+    const int *kf;       /* first sheet of each entry                        */
+    int *kl;             /* last sheet (lowered when the voxel is culled)    */
+    const int *order;    /* entries sorted by first sheet                    */
+    int *active;
+    int nactive, next_new;
+    const float *acc;    /* the tile's accumulation (occlusion map = alpha)  */
+    const int *sat;      /* summed-area table of opaque pixels               */
+    const int *opaque;   /* number of opaque pixels                          */
+    vs_worker_stats *ws;
+} active_list;
+
+/* Rasterize sheet k into `dst`: retire voxels that ended, admit those that
+ * start here, cull occluded ones, splat the rest. */
+static void rasterize_sheet(const tile_ctx *t, active_list *al, int k, float *dst, rect *bb)
+{
+    const vs_frame *F = t->F;
+    const vs_settings *s = F->s;
+    double t0 = vs_now_ms();
+    int keep = 0;
+    for (int a = 0; a < al->nactive; a++)
+        if (al->kl[al->active[a]] >= k) al->active[keep++] = al->active[a];
+    al->nactive = keep;
+    while (al->next_new < al->n && al->kf[al->order[al->next_new]] == k)
+        al->active[al->nactive++] = al->order[al->next_new++];
+    const float bscale = (float)(F->fp.b / F->fp.slab);
+    for (int a = 0; a < al->nactive; a++) {
+        int e = al->active[a];
+        uint32_t v = al->ent[e];
+        float x = F->vx[v], y = F->vy[v];
+        if (s->occlusion && *al->opaque > 0 && footprint_occluded(t, al->sat, x, y)) {
+            al->ws->culled += (uint64_t)(al->kl[e] - k + 1);
+            al->kl[e] = k - 1; /* dropped at the next update */
+            continue;
+        }
+        section sec;
+        if (!make_section(t, x, y, F->vz[v], k, &sec)) continue;
+        al->ws->splatted++;
+        float val = F->rel->voxels[v].value;
+        switch (F->pipeline) {
+        case VS_PIPELINE_POST_CD: raster1(t, &sec, val * bscale, dst, bb); break;
+        case VS_PIPELINE_POST_GS: raster_gs(t, &sec, val * bscale, dst, bb); break;
+        default: {
+            const float *pl = F->payload + 4 * (size_t)v;
+            float w4[4] = {pl[0] * bscale, pl[1] * bscale, pl[2] * bscale, pl[3] * bscale};
+            raster4(t, &sec, w4, dst, bb);
+        }
+        }
+    }
+    al->ws->ms_rasterize += vs_now_ms() - t0;
+}
+
 static inline float lookup_corr(const vs_frame *F, const float *table, float v)
 {
     const vs_classify *c = F->cls;
@@ -364,53 +420,18 @@ void vs_tile_render(void *arg, int worker, int task)
     rect bbox[3];
     for (int i = 0; i < 3; i++) rect_clear(&bbox[i]);
     float *buf[3] = {sheets, sheets + (size_t)ch * t.bw * t.bh, sheets + (size_t)2 * ch * t.bw * t.bh};
-    int nactive = 0, next_new = 0, opaque = 0, opaque_in_sat = 0;
+    int opaque = 0, opaque_in_sat = 0;
+    active_list al = {ent, n, kf, kl, order, active, 0, 0, acc, sat, &opaque, ws};
     const rect own = {1, 1, t.tw + 1, t.th + 1};
-    const float bscale = (float)(F->fp.b / slab);
-
-    /* Rasterize sheet k into buffer `dst`; maintains the active list. */
-#define RASTERIZE_SHEET(k, dst, bb)                                                                   \
-    do {                                                                                              \
-        double t0_ = vs_now_ms();                                                                     \
-        int keep_ = 0;                                                                                \
-        for (int a_ = 0; a_ < nactive; a_++)                                                          \
-            if (kl[active[a_]] >= (k)) active[keep_++] = active[a_];                                  \
-        nactive = keep_;                                                                              \
-        while (next_new < n && kf[order[next_new]] == (k)) active[nactive++] = order[next_new++];     \
-        for (int a_ = 0; a_ < nactive; a_++) {                                                        \
-            int e_ = active[a_];                                                                      \
-            uint32_t v_ = ent[e_];                                                                    \
-            float x_ = F->vx[v_], y_ = F->vy[v_];                                                     \
-            if (s->occlusion && opaque > 0 && footprint_occluded(&t, sat, x_, y_)) {                  \
-                ws->culled += (uint64_t)(kl[e_] - (k) + 1);                                           \
-                kl[e_] = (k)-1; /* dropped at the next update */                                      \
-                continue;                                                                             \
-            }                                                                                         \
-            section sec_;                                                                             \
-            if (!make_section(&t, x_, y_, F->vz[v_], (k), &sec_)) continue;                           \
-            ws->splatted++;                                                                           \
-            const float *pl_ = F->payload ? F->payload + 4 * (size_t)v_ : NULL;                       \
-            float val_ = F->rel->voxels[v_].value;                                                    \
-            switch (pl) {                                                                             \
-            case VS_PIPELINE_POST_CD: raster1(&t, &sec_, val_ * bscale, (dst), (bb)); break;          \
-            case VS_PIPELINE_POST_GS: raster_gs(&t, &sec_, val_ * bscale, (dst), (bb)); break;        \
-            default: {                                                                                \
-                float w4_[4] = {pl_[0] * bscale, pl_[1] * bscale, pl_[2] * bscale, pl_[3] * bscale};  \
-                raster4(&t, &sec_, w4_, (dst), (bb));                                                 \
-            }                                                                                         \
-            }                                                                                         \
-        }                                                                                             \
-        ws->ms_rasterize += vs_now_ms() - t0_;                                                        \
-    } while (0)
 
     int cur = 0, prev = 2, nxt = 1;
-    if (n > 0 && pl == VS_PIPELINE_POST_CD) RASTERIZE_SHEET(kmin, buf[cur], &bbox[cur]);
+    if (n > 0 && pl == VS_PIPELINE_POST_CD) rasterize_sheet(&t, &al, kmin, buf[cur], &bbox[cur]);
     for (int k = kmin; n > 0 && k <= kmax; k++) {
         if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) break;
         if (pl == VS_PIPELINE_POST_CD) {
-            if (k + 1 <= kmax) RASTERIZE_SHEET(k + 1, buf[nxt], &bbox[nxt]);
+            if (k + 1 <= kmax) rasterize_sheet(&t, &al, k + 1, buf[nxt], &bbox[nxt]);
         } else {
-            RASTERIZE_SHEET(k, buf[cur], &bbox[cur]);
+            rasterize_sheet(&t, &al, k, buf[cur], &bbox[cur]);
         }
         ws->tiles_total++;
         ws->sheets++;
@@ -526,7 +547,6 @@ void vs_tile_render(void *arg, int worker, int task)
         }
         if (s->occlusion && opaque >= npix) break; /* tile early termination */
     }
-#undef RASTERIZE_SHEET
 
 done:
     if (acc) {
