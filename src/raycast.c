@@ -18,7 +18,7 @@
 #include <string.h>
 
 enum { MODE_ANALYTIC, MODE_GAUSS, MODE_TRILINEAR };
-enum { BRICK = 4, MAX_TAPS = 20 };
+enum { BRICK = 2, MAX_TAPS = 20 }; /* 2^3 bricks: the kernel's reach dominates */
 
 typedef struct rc_job {
     const struct vs_volume *vol;
@@ -33,7 +33,7 @@ typedef struct rc_job {
     double dir_len;        /* |dir|: index units per view unit              */
     double box_lo[3], box_hi[3]; /* index box where samples are taken      */
     int refine;            /* bisect iso crossings (analytic, iso-range)    */
-    /* empty-space skipping: brick b covers points [org + 8b, org + 8b + 8) */
+    /* empty-space skipping: brick b covers points [org + B b, org + B (b+1)) */
     double org;
     int nb[3];
     uint8_t *skip;         /* 1: no point of the brick can have opacity > 0 */
@@ -399,6 +399,18 @@ static void brick_interval(const rc_job *J, int b, double dil, int n, int *lo, i
     }
 }
 
+/* Shared, read-only state of the brick-grid build; chunks of brick layers
+ * [b0, b1) are independent and run on separate threads. */
+typedef struct skip_build {
+    rc_job *J;
+    double dil, wmin, wmax;
+    const int *ix, *iy, *iz;       /* voxel intervals per brick and axis */
+    const uint8_t *zx, *zy, *zz;   /* interval reaches outside the volume */
+    int b0, b1;                    /* this chunk */
+    int failed;                    /* out of memory in this chunk */
+    pthread_t tid;
+} skip_build;
+
 /* A tighter bound for the Gaussian reconstruction, which the min-max range
  * cannot give for noisy data (one bright speckle voxel makes its whole
  * neighbourhood "relevant" although b * 2^0 * speckle stays far below the
@@ -407,191 +419,239 @@ static void brick_interval(const rc_job *J, int b, double dil, int n, int *lo, i
  *     f(p) <= b sum_o w(o_x) w(o_y) w(o_z) f+(c+o),  w(o) = 2^(-2 dist(o)^2),
  * a separable filter.  The same with f- bounds f from below.  We filter
  * slice by slice (x, y), keep a ring of slices for z, and take each brick's
- * maximum: hi[] bounds f+ terms, neg[] the f- terms. */
-static vs_status gauss_brick_bounds(vs_context *ctx, const rc_job *J, float *hi, float *neg)
+ * maximum: hi[] bounds the f+ part, neg[] the f- part (bricks of layers
+ * b0..b1-1, indexed from layer b0). */
+static int gauss_brick_bounds(const skip_build *B, float *hi, float *neg)
 {
+    const rc_job *J = B->J;
     const struct vs_volume *v = J->vol;
     const int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
     const int olo = -(int)ceil(J->R), ohi = (int)ceil(J->R) + 1, nt = ohi - olo + 1;
     const int org = (int)J->org;
-    const int ncx = BRICK * J->nb[0], ncy = BRICK * J->nb[1], ncz = BRICK * J->nb[2];
-    double w1[2 * 8 + 3];
+    const int ncx = BRICK * J->nb[0], ncy = BRICK * J->nb[1];
+    float w1[2 * 8 + 3], wz[2 * 8 + 3]; /* the normalization b, once: in the z taps */
     for (int o = olo; o <= ohi; o++) {
         double d = o < 0 ? -o : o > 1 ? o - 1 : 0;
-        w1[o - olo] = d > J->R ? 0.0 : exp2(-2.0 * d * d);
+        w1[o - olo] = d > J->R ? 0.0f : (float)exp2(-2.0 * d * d);
+        wz[o - olo] = (float)(J->b * w1[o - olo]);
     }
-    double wz[2 * 8 + 3]; /* the normalization b, once: in the z taps */
-    for (int t = 0; t < nt; t++) wz[t] = J->b * w1[t];
+    /* a row padded with zeros covers voxels org+olo .. org+ncx-1+ohi */
+    const int plen = ncx + nt - 1, poff = -(org + olo);
     double *row = malloc(sizeof(double) * (size_t)nx);
-    double *tmp = malloc(sizeof(double) * (size_t)ncx * ny);
+    float *pad = calloc((size_t)plen, sizeof(float));
+    float *tmp = malloc(sizeof(float) * (size_t)ncx * ny);
     float *ring = malloc(sizeof(float) * (size_t)nt * ncx * ncy);
-    if (!row || !tmp || !ring) {
-        free(row);
-        free(tmp);
-        free(ring);
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory for the kernel bound");
+    float *acc = malloc(sizeof(float) * (size_t)ncx);
+    if (!row || !pad || !tmp || !ring || !acc) {
+        free(row); free(pad); free(tmp); free(ring); free(acc);
+        return 0;
     }
-    size_t nbr = (size_t)J->nb[0] * J->nb[1] * J->nb[2];
+    size_t layer = (size_t)J->nb[0] * J->nb[1];
+    for (size_t i = 0; i < (size_t)(B->b1 - B->b0) * layer; i++) hi[i] = neg[i] = 0.0f;
     int passes = v->vmin < 0.0 ? 2 : 1;
-    for (size_t i = 0; i < nbr; i++) hi[i] = neg[i] = 0.0f;
     for (int pass = 0; pass < passes; pass++) {
         float *out = pass == 0 ? hi : neg;
         int have = -1; /* highest slice k filtered into the ring */
-        for (int czi = 0; czi < ncz; czi++) {
+        for (int czi = BRICK * B->b0; czi < BRICK * B->b1; czi++) {
             int cz = org + czi;
+            int kmin = cz + olo > 0 ? cz + olo : 0;
             int kmax = cz + ohi < nz - 1 ? cz + ohi : nz - 1;
+            if (kmin > kmax) continue; /* no voxel slice reaches this cell layer */
+            if (have < kmin - 1) have = kmin - 1;
             for (int k = have + 1; k <= kmax; k++) {
-                for (int j = 0; j < ny; j++) {
+                for (int j = 0; j < ny; j++) { /* x */
                     fetch_row(v, j, k, 0, nx - 1, row);
                     for (int i = 0; i < nx; i++) {
                         double x = pass == 0 ? row[i] : -row[i];
-                        row[i] = x > 0.0 ? x : 0.0;
+                        pad[poff + i] = x > 0.0 ? (float)x : 0.0f;
                     }
-                    double *t = tmp + (size_t)j * ncx;
+                    float *t = tmp + (size_t)j * ncx;
                     for (int cxi = 0; cxi < ncx; cxi++) {
-                        int cx = org + cxi;
-                        double acc = 0.0;
-                        for (int o = olo; o <= ohi; o++) {
-                            int i = cx + o;
-                            if (i >= 0 && i < nx) acc += w1[o - olo] * row[i];
-                        }
-                        t[cxi] = acc;
+                        float a = 0.0f;
+                        for (int o = 0; o < nt; o++) a += w1[o] * pad[cxi + o];
+                        t[cxi] = a;
                     }
                 }
                 float *sl = ring + (size_t)(k % nt) * ncx * ncy;
-                for (int cyi = 0; cyi < ncy; cyi++) {
+                for (int cyi = 0; cyi < ncy; cyi++) { /* y */
                     int cy = org + cyi;
                     float *d = sl + (size_t)cyi * ncx;
                     for (int cxi = 0; cxi < ncx; cxi++) d[cxi] = 0.0f;
                     for (int o = olo; o <= ohi; o++) {
                         int j = cy + o;
                         if (j < 0 || j >= ny) continue;
-                        const double *t = tmp + (size_t)j * ncx;
-                        for (int cxi = 0; cxi < ncx; cxi++) d[cxi] += (float)(w1[o - olo] * t[cxi]);
+                        const float *t = tmp + (size_t)j * ncx;
+                        const float w = w1[o - olo];
+                        for (int cxi = 0; cxi < ncx; cxi++) d[cxi] += w * t[cxi];
                     }
                 }
                 have = k;
             }
-            int kmin = cz + olo > 0 ? cz + olo : 0;
-            if (kmin > kmax) continue; /* no voxel slice reaches this cell layer */
-            size_t bzo = (size_t)(czi / BRICK) * J->nb[1];
-            for (int cyi = 0; cyi < ncy; cyi++) {
+            size_t bzo = (size_t)(czi / BRICK - B->b0) * J->nb[1]; /* chunk-relative */
+            for (int cyi = 0; cyi < ncy; cyi++) { /* z, then the brick maximum */
+                for (int cxi = 0; cxi < ncx; cxi++) acc[cxi] = 0.0f;
+                for (int k = kmin; k <= kmax; k++) {
+                    const float *sr = ring + ((size_t)(k % nt) * ncy + cyi) * ncx;
+                    const float w = wz[k - cz - olo];
+                    for (int cxi = 0; cxi < ncx; cxi++) acc[cxi] += w * sr[cxi];
+                }
                 float *ob = out + (bzo + cyi / BRICK) * J->nb[0];
                 for (int cxi = 0; cxi < ncx; cxi++) {
-                    double acc = 0.0;
-                    for (int k = kmin; k <= kmax; k++)
-                        acc += wz[k - cz - olo] * ring[((size_t)(k % nt) * ncy + cyi) * ncx + cxi];
-                    /* round up: float sums above must not understate the bound */
-                    float f = (float)(acc * (1.0 + 1e-5) + 1e-30);
+                    /* round up: float sums must not understate the bound */
+                    float f = acc[cxi] * 1.00001f + 1e-30f;
                     if (f > ob[cxi / BRICK]) ob[cxi / BRICK] = f;
                 }
             }
         }
     }
-    free(row);
-    free(tmp);
-    free(ring);
-    return VS_OK;
+    free(row); free(pad); free(tmp); free(ring); free(acc);
+    return 1;
 }
 
-/* Value range of every brick's dependency region, by separable min/max
- * passes along x, y, z (about 3 reads per voxel), then the skip flags. */
-static vs_status build_skip(vs_context *ctx, rc_job *J)
+/* Value range of each brick's dependency region by separable min/max passes
+ * (x and y per voxel slice into a small ring of slices, then z per brick
+ * layer), combined with the kernel bound, then the skip flags. */
+static void *skip_chunk(void *arg)
 {
+    skip_build *B = arg;
+    rc_job *J = B->J;
     const struct vs_volume *v = J->vol;
-    const int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
-    double dil = J->mode == MODE_GAUSS ? J->R : 1.0; /* voxels a point depends on */
-    J->org = -ceil(J->R) - 1.0;
-    for (int a = 0; a < 3; a++) J->nb[a] = (int)ceil((v->dims[a] - 1 + J->R - J->org) / BRICK) + 1;
-    const int bx = J->nb[0], by = J->nb[1], bz = J->nb[2];
-    size_t nbr = (size_t)bx * by * bz;
-    int *iv = malloc(sizeof(int) * 2 * (size_t)(bx + by + bz));
-    uint8_t *zf = malloc((size_t)(bx + by + bz));
-    float *amin = malloc(sizeof(float) * (size_t)nz * ny * bx), *amax = malloc(sizeof(float) * (size_t)nz * ny * bx);
-    float *cmin = malloc(sizeof(float) * (size_t)nz * by * bx), *cmax = malloc(sizeof(float) * (size_t)nz * by * bx);
+    const int nx = v->dims[0], ny = v->dims[1];
+    const int bx = J->nb[0], by = J->nb[1];
+    const int nring = BRICK + 2 * (int)ceil(B->dil) + 2; /* slices one brick layer needs */
+    size_t nlayer = (size_t)bx * by * (size_t)(B->b1 - B->b0);
+    float *amin = malloc(sizeof(float) * (size_t)ny * bx), *amax = malloc(sizeof(float) * (size_t)ny * bx);
+    float *cmin = malloc(sizeof(float) * (size_t)nring * by * bx);
+    float *cmax = malloc(sizeof(float) * (size_t)nring * by * bx);
     double *row = malloc(sizeof(double) * (size_t)nx);
-    J->skip = malloc(nbr);
-    if (!iv || !zf || !amin || !amax || !cmin || !cmax || !row || !J->skip) {
-        free(iv); free(zf); free(amin); free(amax); free(cmin); free(cmax); free(row); free(J->skip);
-        J->skip = NULL;
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory for the brick grid");
+    int gauss = J->mode == MODE_GAUSS;
+    /* kernel bounds for this chunk's bricks (indexed from layer b0) */
+    float *kb_hi = gauss ? malloc(sizeof(float) * nlayer) : NULL;
+    float *kb_neg = gauss ? malloc(sizeof(float) * nlayer) : NULL;
+    if (!amin || !amax || !cmin || !cmax || !row || (gauss && (!kb_hi || !kb_neg))) {
+        B->failed = 1;
+    } else if (gauss) {
+        B->failed = !gauss_brick_bounds(B, kb_hi, kb_neg);
     }
-    int *ix = iv, *iy = iv + 2 * bx, *iz = iv + 2 * (bx + by);
-    uint8_t *zx = zf, *zy = zf + bx, *zz = zf + bx + by;
-    for (int b = 0; b < bx; b++) brick_interval(J, b, dil, nx, &ix[2 * b], &ix[2 * b + 1], &zx[b]);
-    for (int b = 0; b < by; b++) brick_interval(J, b, dil, ny, &iy[2 * b], &iy[2 * b + 1], &zy[b]);
-    for (int b = 0; b < bz; b++) brick_interval(J, b, dil, nz, &iz[2 * b], &iz[2 * b + 1], &zz[b]);
-    /* x pass: per voxel row and x-brick (empty interval -> +inf/-inf) */
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++) {
-            fetch_row(v, j, k, 0, nx - 1, row);
-            float *mn = amin + ((size_t)k * ny + j) * bx, *mx = amax + ((size_t)k * ny + j) * bx;
-            for (int b = 0; b < bx; b++) {
-                double lo = INFINITY, hi = -INFINITY;
-                for (int i = ix[2 * b]; i <= ix[2 * b + 1]; i++) {
-                    if (row[i] < lo) lo = row[i];
-                    if (row[i] > hi) hi = row[i];
-                }
-                mn[b] = (float)lo;
-                mx[b] = (float)hi;
-            }
-        }
-    /* y pass */
-    for (int k = 0; k < nz; k++)
-        for (int b = 0; b < by; b++) {
-            float *mn = cmin + ((size_t)k * by + b) * bx, *mx = cmax + ((size_t)k * by + b) * bx;
-            for (int x = 0; x < bx; x++) {
-                mn[x] = INFINITY;
-                mx[x] = -INFINITY;
-            }
-            for (int j = iy[2 * b]; j <= iy[2 * b + 1]; j++) {
-                const float *smn = amin + ((size_t)k * ny + j) * bx, *smx = amax + ((size_t)k * ny + j) * bx;
-                for (int x = 0; x < bx; x++) {
-                    if (smn[x] < mn[x]) mn[x] = smn[x];
-                    if (smx[x] > mx[x]) mx[x] = smx[x];
-                }
-            }
-        }
-    /* z pass, then classify the range */
-    double wmin = 1.0, wmax = 1.0;
-    float *kb_hi = NULL, *kb_neg = NULL;
-    if (J->mode == MODE_GAUSS) {
-        gauss_weight_bounds(J, &wmin, &wmax);
-        kb_hi = malloc(sizeof(float) * nbr);
-        kb_neg = malloc(sizeof(float) * nbr);
-        vs_status st = kb_hi && kb_neg ? gauss_brick_bounds(ctx, J, kb_hi, kb_neg)
-                                       : vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory");
-        if (st != VS_OK) {
-            free(kb_hi); free(kb_neg);
-            free(iv); free(zf); free(amin); free(amax); free(cmin); free(cmax); free(row); free(J->skip);
-            J->skip = NULL;
-            return st;
-        }
+    if (B->failed) {
+        free(amin); free(amax); free(cmin); free(cmax); free(row); free(kb_hi); free(kb_neg);
+        return NULL;
     }
     const vs_classify *c = J->cls;
-    for (int b = 0; b < bz; b++)
+    const int *ix = B->ix, *iy = B->iy, *iz = B->iz;
+    int have = -1; /* highest slice reduced into the ring */
+    for (int b = B->b0; b < B->b1; b++) {
+        if (have < iz[2 * b] - 1) have = iz[2 * b] - 1;
+        for (int k = have + 1; k <= iz[2 * b + 1]; k++) {
+            /* x: per voxel row and x-brick (empty interval -> +inf/-inf) */
+            for (int j = 0; j < ny; j++) {
+                fetch_row(v, j, k, 0, nx - 1, row);
+                float *mn = amin + (size_t)j * bx, *mx = amax + (size_t)j * bx;
+                for (int x = 0; x < bx; x++) {
+                    double lo = INFINITY, hi = -INFINITY;
+                    for (int i = ix[2 * x]; i <= ix[2 * x + 1]; i++) {
+                        if (row[i] < lo) lo = row[i];
+                        if (row[i] > hi) hi = row[i];
+                    }
+                    mn[x] = (float)lo;
+                    mx[x] = (float)hi;
+                }
+            }
+            /* y: into ring slot k */
+            for (int y = 0; y < by; y++) {
+                float *mn = cmin + ((size_t)(k % nring) * by + y) * bx;
+                float *mx = cmax + ((size_t)(k % nring) * by + y) * bx;
+                for (int x = 0; x < bx; x++) {
+                    mn[x] = INFINITY;
+                    mx[x] = -INFINITY;
+                }
+                for (int j = iy[2 * y]; j <= iy[2 * y + 1]; j++) {
+                    const float *smn = amin + (size_t)j * bx, *smx = amax + (size_t)j * bx;
+                    for (int x = 0; x < bx; x++) {
+                        if (smn[x] < mn[x]) mn[x] = smn[x];
+                        if (smx[x] > mx[x]) mx[x] = smx[x];
+                    }
+                }
+            }
+            have = k;
+        }
+        /* z, and the decision */
         for (int y = 0; y < by; y++)
             for (int x = 0; x < bx; x++) {
                 double m = INFINITY, M = -INFINITY;
                 for (int k = iz[2 * b]; k <= iz[2 * b + 1]; k++) {
-                    size_t i = ((size_t)k * by + y) * bx + x;
+                    size_t i = ((size_t)(k % nring) * by + y) * bx + x;
                     if (cmin[i] < m) m = cmin[i];
                     if (cmax[i] > M) M = cmax[i];
                 }
-                if (zx[x] || zy[y] || zz[b]) { /* voxels outside count as 0 */
+                if (B->zx[x] || B->zy[y] || B->zz[b]) { /* voxels outside count as 0 */
                     if (m > 0.0) m = 0.0;
                     if (M < 0.0) M = 0.0;
                 }
-                double vlo = fmin(m * wmin, m * wmax), vhi = fmax(M * wmin, M * wmax);
-                size_t bi = ((size_t)b * by + y) * bx + x;
-                if (kb_hi) {
-                    vhi = fmin(vhi, kb_hi[bi]);
-                    vlo = fmax(vlo, -(double)kb_neg[bi]);
+                double vlo = fmin(m * B->wmin, m * B->wmax), vhi = fmax(M * B->wmin, M * B->wmax);
+                size_t bl = ((size_t)(b - B->b0) * by + y) * bx + x;
+                if (gauss) {
+                    vhi = fmin(vhi, kb_hi[bl]);
+                    vlo = fmax(vlo, -(double)kb_neg[bl]);
                 }
-                J->skip[bi] = (uint8_t)(vhi < c->alpha_lo || vlo > c->alpha_hi);
+                J->skip[((size_t)b * by + y) * bx + x] = (uint8_t)(vhi < c->alpha_lo || vlo > c->alpha_hi);
             }
-    free(kb_hi); free(kb_neg);
-    free(iv); free(zf); free(amin); free(amax); free(cmin); free(cmax); free(row);
+    }
+    free(amin); free(amax); free(cmin); free(cmax); free(row); free(kb_hi); free(kb_neg);
+    return NULL;
+}
+
+static vs_status build_skip(vs_context *ctx, rc_job *J, int nthreads)
+{
+    const struct vs_volume *v = J->vol;
+    double dil = J->mode == MODE_GAUSS ? J->R : 1.0; /* voxels a point depends on */
+    J->org = -ceil(J->R) - 1.0;
+    for (int a = 0; a < 3; a++) J->nb[a] = (int)ceil((v->dims[a] - 1 + J->R - J->org) / BRICK) + 1;
+    const int bx = J->nb[0], by = J->nb[1], bz = J->nb[2];
+    int *iv = malloc(sizeof(int) * 2 * (size_t)(bx + by + bz));
+    uint8_t *zf = malloc((size_t)(bx + by + bz));
+    if (nthreads > bz) nthreads = bz;
+    skip_build *ch = calloc((size_t)nthreads, sizeof *ch);
+    J->skip = malloc((size_t)bx * by * bz);
+    if (!iv || !zf || !ch || !J->skip) {
+        free(iv); free(zf); free(ch); free(J->skip);
+        J->skip = NULL;
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory for the brick grid");
+    }
+    skip_build base = {.J = J, .dil = dil, .wmin = 1.0, .wmax = 1.0,
+                       .ix = iv, .iy = iv + 2 * bx, .iz = iv + 2 * (bx + by),
+                       .zx = zf, .zy = zf + bx, .zz = zf + bx + by};
+    for (int b = 0; b < bx; b++) brick_interval(J, b, dil, v->dims[0], &iv[2 * b], &iv[2 * b + 1], &zf[b]);
+    for (int b = 0; b < by; b++)
+        brick_interval(J, b, dil, v->dims[1], &iv[2 * (bx + b)], &iv[2 * (bx + b) + 1], &zf[bx + b]);
+    for (int b = 0; b < bz; b++)
+        brick_interval(J, b, dil, v->dims[2], &iv[2 * (bx + by + b)], &iv[2 * (bx + by + b) + 1],
+                       &zf[bx + by + b]);
+    if (J->mode == MODE_GAUSS) gauss_weight_bounds(J, &base.wmin, &base.wmax);
+    /* chunks of brick layers; the caller runs chunk 0 */
+    int started = 1;
+    for (int t = 0; t < nthreads; t++) {
+        ch[t] = base;
+        ch[t].b0 = (int)((long)bz * t / nthreads);
+        ch[t].b1 = (int)((long)bz * (t + 1) / nthreads);
+    }
+    for (int t = 1; t < nthreads; t++) {
+        if (pthread_create(&ch[t].tid, NULL, skip_chunk, &ch[t]) != 0) break;
+        started++;
+    }
+    skip_chunk(&ch[0]);
+    for (int t = started; t < nthreads; t++) skip_chunk(&ch[t]); /* threads we could not start */
+    int failed = ch[0].failed;
+    for (int t = 1; t < nthreads; t++) {
+        if (t < started) pthread_join(ch[t].tid, NULL);
+        failed |= ch[t].failed;
+    }
+    free(iv); free(zf); free(ch);
+    if (failed) {
+        free(J->skip);
+        J->skip = NULL;
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory for the brick grid");
+    }
     return VS_OK;
 }
 
@@ -655,14 +715,19 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         J->box_hi[a] = vol->dims[a] - 1 + ext;
     }
     J->dir_len = sqrt(J->dir[0] * J->dir[0] + J->dir[1] * J->dir[1] + J->dir[2] * J->dir[2]);
+    int nthreads = s->threads == 0 ? 2 : s->threads;
+    if (nthreads > 256) nthreads = 256;
+    if (nthreads > J->cam.height) nthreads = J->cam.height;
+    double t_setup = vs_now_ms();
     if (J->mode != MODE_ANALYTIC) {
-        rc = build_skip(ctx, J);
+        rc = build_skip(ctx, J, nthreads);
         if (rc != VS_OK) {
             free(cls);
             free(J);
             return rc;
         }
     }
+    double ms_setup = vs_now_ms() - t_setup;
     size_t npix = (size_t)J->cam.width * J->cam.height;
     J->rgba = malloc(npix * 4 * sizeof(float));
     if (!J->rgba) {
@@ -677,9 +742,6 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
     atomic_init(&J->rows_done, 0);
     atomic_init(&J->cancel, 0);
 
-    int nthreads = s->threads == 0 ? 2 : s->threads;
-    if (nthreads > 256) nthreads = 256;
-    if (nthreads > J->cam.height) nthreads = J->cam.height;
     rc_worker *w = calloc((size_t)nthreads, sizeof *w);
     if (!w) {
         free(J->rgba);
@@ -722,7 +784,8 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         st->width = out->width;
         st->height = out->height;
         st->voxels_total = (uint64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
-        st->ms_stage.shade = ms_threads; /* summed over threads */
+        st->ms_stage.setup = ms_setup;   /* the brick grid for empty-space skipping */
+        st->ms_stage.shade = ms_threads; /* casting rays, summed over threads */
         st->iso_lo = cls->lo;
         st->iso_hi = cls->hi;
         st->ramp = cls->ramp;
