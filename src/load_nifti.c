@@ -20,6 +20,20 @@
 
 #include <nifti1_io.h>
 
+static int supported_real(int dt)
+{
+    switch (dt) {
+    case DT_UINT8: case DT_INT8: case DT_INT16: case DT_UINT16: case DT_INT32: case DT_UINT32:
+    case DT_INT64: case DT_UINT64: case DT_FLOAT32: case DT_FLOAT64: return 1;
+    default: return 0;
+    }
+}
+
+static unsigned rd16(const unsigned char *p, int big)
+{
+    return big ? (unsigned)p[0] << 8 | p[1] : (unsigned)p[1] << 8 | p[0];
+}
+
 static float rd_f32(const unsigned char *p, int big)
 {
     uint32_t u = big ? (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]
@@ -54,7 +68,30 @@ static vs_status peek_header(vs_context *ctx, const char *path, const char *hdr,
     if (n < (int)sizeof h)
         return vs_set_error(ctx, VS_ERR_FORMAT,
                             "%s: truncated: the NIfTI header needs 348 bytes, file has %d", path, n);
-    for (int a = 0; a < 3; a++) pixdim[a] = rd_f32(h + 76 + 4 * (a + 1), le != 348);
+    /* nifticlib prints to stderr (whatever its debug level) when dim[0],
+     * dim[1] or datatype are bad, so those are checked here first, with its
+     * byte-order rule: dim[0] in 1..7 as read natively, else byte-swapped;
+     * dim[0] == 0 lets sizeof_hdr decide. */
+    const uint16_t one = 1;
+    int host_big = *(const unsigned char *)&one == 0;
+    int big = host_big;
+    int dim0 = (int16_t)rd16(h + 40, big);
+    if (dim0 == 0) {
+        big = le != 348;
+    } else if (dim0 < 0 || dim0 > 7) {
+        big = !host_big;
+        dim0 = (int16_t)rd16(h + 40, big);
+        if (dim0 < 0 || dim0 > 7)
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: bad NIfTI header: dim[0] is %d", path,
+                                (int16_t)rd16(h + 40, host_big));
+    }
+    int dim1 = (int16_t)rd16(h + 42, big), datatype = (int16_t)rd16(h + 70, big);
+    if (dim1 <= 0)
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: bad NIfTI header: dim[1] is %d", path, dim1);
+    if (!supported_real(datatype))
+        return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "%s: unsupported NIfTI datatype %s (%d)", path,
+                            nifti_datatype_string(datatype), datatype);
+    for (int a = 0; a < 3; a++) pixdim[a] = rd_f32(h + 76 + 4 * (a + 1), big);
     return VS_OK;
 }
 
@@ -102,15 +139,6 @@ static vs_status read_voxels(vs_context *ctx, const char *path, const char *inam
                           zerr != Z_OK && zerr != Z_BUF_ERROR ? ")" : "");
     gzclose(gz);
     return st;
-}
-
-static int supported_real(int dt)
-{
-    switch (dt) {
-    case DT_UINT8: case DT_INT8: case DT_INT16: case DT_UINT16: case DT_INT32: case DT_UINT32:
-    case DT_INT64: case DT_UINT64: case DT_FLOAT32: case DT_FLOAT64: return 1;
-    default: return 0;
-    }
 }
 
 static double nifti_value(const void *p, int dt, size_t i)

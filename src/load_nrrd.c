@@ -80,6 +80,9 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
     if (st != VS_OK) return st;
     if (fsize == 0) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: empty file", path);
 
+    /* Teem's only switch for its stderr warnings (e.g. data after the end)
+     * is this process-wide flag; vsplat never prints, so turn it off. */
+    nrrdStateVerboseIO = 0;
     Nrrd *nrrd = nrrdNew();
     NrrdIoState *nio = nrrdIoStateNew();
     vs_volume *v = NULL;
