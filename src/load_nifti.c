@@ -204,7 +204,11 @@ vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
     }
     uint64_t isize;
     st = vs_load_file_size(ctx, nim->iname, &isize);
-    if (st != VS_OK) goto done;
+    if (st != VS_OK) {
+        if (strcmp(nim->iname, path) != 0)
+            st = vs_set_error(ctx, st, "%s: cannot read its image file %s", path, nim->iname);
+        goto done;
+    }
     uint64_t offset = nim->iname_offset > 0 ? (uint64_t)nim->iname_offset : 0;
     int compressed = vs_load_ends_with(nim->iname, ".gz");
     if (compressed ? need > vs_load_inflate_bound(isize) : offset + need > isize) {

@@ -200,33 +200,59 @@ enum { NX = 7, NY = 5, NZ = 3 };
  * gives tests no nifticlib include path, so the header is written here from
  * the NIfTI-1 specification; the loader reads it back with nifticlib. */
 enum { DT_U8 = 2, DT_I16 = 4, DT_F32 = 16, DT_F64 = 64, DT_U16 = 512 };
-static void write_nifti(const char *path, int ndim, const int dims[4], int datatype, int bitpix,
-                        const float pixdim[3], float slope, float inter, const void *data,
-                        size_t nbytes)
+static void put(unsigned char *p, const void *v, int n, int big)
+{
+    for (int i = 0; i < n; i++) p[i] = ((const unsigned char *)v)[big ? n - 1 - i : i];
+}
+
+/* big: write header and data big-endian; pair: PATH.hdr + PATH.img ("ni1")
+ * where path is given without extension. */
+static void write_nifti_ex(const char *path, int big, int pair, int ndim, const int dims[4],
+                           int datatype, int bitpix, const float pixdim[3], float slope,
+                           float inter, const void *data, size_t nbytes)
 {
     unsigned char h[352];
     memset(h, 0, sizeof h);
     int32_t i32 = 348;
-    memcpy(h, &i32, 4);
+    put(h, &i32, 4, big);
     int16_t dim[8] = {(int16_t)ndim, 1, 1, 1, 1, 1, 1, 1};
     for (int a = 0; a < ndim; a++) dim[a + 1] = (int16_t)dims[a];
-    memcpy(h + 40, dim, sizeof dim);
+    for (int a = 0; a < 8; a++) put(h + 40 + 2 * a, &dim[a], 2, big);
     int16_t dt = (int16_t)datatype, bp = (int16_t)bitpix;
-    memcpy(h + 70, &dt, 2);
-    memcpy(h + 72, &bp, 2);
+    put(h + 70, &dt, 2, big);
+    put(h + 72, &bp, 2, big);
     float pd[8] = {1, pixdim[0], pixdim[1], pixdim[2], 1, 1, 1, 1};
-    memcpy(h + 76, pd, sizeof pd);
-    float vox_offset = 352;
-    memcpy(h + 108, &vox_offset, 4);
-    memcpy(h + 112, &slope, 4);
-    memcpy(h + 116, &inter, 4);
-    memcpy(h + 344, "n+1", 4);
-    unsigned char *all = malloc(sizeof h + nbytes);
-    memcpy(all, h, sizeof h);
-    memcpy(all + sizeof h, data, nbytes);
-    if (ends_with_gz(path)) write_gz(path, all, sizeof h + nbytes);
-    else write_bytes(path, all, sizeof h + nbytes);
+    for (int a = 0; a < 8; a++) put(h + 76 + 4 * a, &pd[a], 4, big);
+    float vox_offset = pair ? 0 : 352;
+    put(h + 108, &vox_offset, 4, big);
+    put(h + 112, &slope, 4, big);
+    put(h + 116, &inter, 4, big);
+    memcpy(h + 344, pair ? "ni1" : "n+1", 4);
+    size_t hsize = pair ? 348 : 352;
+    int elem = bitpix / 8;
+    unsigned char *all = malloc(hsize + nbytes);
+    memcpy(all, h, hsize);
+    unsigned char *d = pair ? all : all + hsize;
+    for (size_t i = 0; i < nbytes; i += (size_t)elem) put(d + i, (const unsigned char *)data + i, elem, big);
+    if (pair) {
+        char p2[1200];
+        snprintf(p2, sizeof p2, "%s.img", path);
+        write_bytes(p2, d, nbytes);
+        snprintf(p2, sizeof p2, "%s.hdr", path);
+        write_bytes(p2, h, hsize);
+    } else if (ends_with_gz(path)) {
+        write_gz(path, all, hsize + nbytes);
+    } else {
+        write_bytes(path, all, hsize + nbytes);
+    }
     free(all);
+}
+
+static void write_nifti(const char *path, int ndim, const int dims[4], int datatype, int bitpix,
+                        const float pixdim[3], float slope, float inter, const void *data,
+                        size_t nbytes)
+{
+    write_nifti_ex(path, 0, 0, ndim, dims, datatype, bitpix, pixdim, slope, inter, data, nbytes);
 }
 
 static void test_nifti(vs_context *ctx)
@@ -289,6 +315,26 @@ static void test_nifti(vs_context *ctx)
     check_shape(v, "u8 nifti", NX, NY, NZ, VS_U8, 1, 1, 1, 0);
     if (v) CHECK(memcmp(vs_volume_data(v), u8, sizeof u8) == 0, "u8 nifti: data differ");
     vs_volume_release(v);
+    /* big-endian i16 with spacing, and a .hdr/.img pair (loaded by either name) */
+    path_of(path, sizeof path, "t_be_i16.nii");
+    write_nifti_ex(path, 1, 0, 3, dims, DT_I16, 16, sp, 0.0f, 0.0f, i16, sizeof i16);
+    v = load(ctx, path, NULL);
+    check_shape(v, "big-endian nifti", NX, NY, NZ, VS_I16, 0.5, 0.75, 2.0, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), i16, sizeof i16) == 0, "big-endian nifti: data differ");
+    vs_volume_release(v);
+    path_of(path, sizeof path, "t_pair");
+    write_nifti_ex(path, 1, 1, 3, dims, DT_I16, 16, sp, 0.0f, 0.0f, i16, sizeof i16);
+    for (int k = 0; k < 2; k++) {
+        path_of(path, sizeof path, k ? "t_pair.img" : "t_pair.hdr");
+        v = load(ctx, path, NULL);
+        check_shape(v, path, NX, NY, NZ, VS_I16, 0.5, 0.75, 2.0, 0);
+        if (v) CHECK(memcmp(vs_volume_data(v), i16, sizeof i16) == 0, "%s: data differ", path);
+        vs_volume_release(v);
+    }
+    path_of(path, sizeof path, "t_pair.img");
+    unlink(path);
+    path_of(path, sizeof path, "t_pair.hdr");
+    expect_fail(ctx, path, NULL, "nifti pair without .img");
     /* zero spacing on a real axis is rejected */
     const float zero[3] = {1, 0, 1};
     path_of(path, sizeof path, "zero_pixdim.nii");
