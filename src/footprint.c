@@ -52,6 +52,9 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
     fp->sx = (float)sx;
     fp->sy = (float)sy;
     fp->sheared = fabs(sx) > 1e-9 || fabs(sy) > 1e-9;
+    /* Isotropic voxels (any view) and anisotropic ones seen along an axis:
+     * the footprint is an outer product of a row and a column of weights */
+    fp->separable = !fp->sheared && fabs(B) <= 1e-12 * (A + C);
     fp->Qzx = Q[2][0];
     fp->Qzy = Q[2][1];
     fp->rz = sqrt(fp->emax / fp->kappa);

@@ -24,6 +24,7 @@ typedef struct vs_footprint {
     float row_shift;     /* -B/A: a row's centre moves by row_shift * dy       */
     float sx, sy;        /* shift per view unit of depth                       */
     int sheared;         /* s != 0                                             */
+    int separable;       /* B == 0 and no shear: footprint = row x column      */
     double kappa;        /* depth exponent per view unit^2                     */
     double rz;           /* depth half-extent (view units)                     */
     double rx, ry;       /* footprint half-extent in pixels (incl. shift)      */

@@ -40,6 +40,10 @@ typedef struct tile_ctx {
     int x0, y0, tw, th;  /* own pixels in image coordinates                 */
     int bw, bh;          /* buffer size: own pixels plus a one-pixel seam    */
     int ox, oy;          /* image coordinates of buffer pixel (0,0)          */
+    float rx0;           /* footprint half-width without shift               */
+    float *ex, *exd;     /* scratch: one footprint row of weights (bw each)  */
+    int *rxa, *rxb;      /* scratch: per buffer row, the footprint's chord   */
+    float *rey, *rdy;    /* scratch: per buffer row, its weight and offset   */
     float ry0;           /* footprint half-height without shift              */
 } tile_ctx;
 
@@ -109,6 +113,129 @@ static inline void grow(rect *bb, int xa, int xb, int y)
     if (y + 1 > bb->y1) bb->y1 = y + 1;
 }
 
+/* Separable footprints (B = 0, no shear): exp(-A dx^2 - C dy^2) is a column
+ * weight times a row weight, so a section needs width + height table
+ * look-ups instead of width x height.  The pixel set is unchanged: each row
+ * still spans only the ellipse's chord.  Returns the first buffer column of
+ * ex[] (and fills exd[] = ex * dx when asked, for the gradient splats). */
+static inline int row_weights(const tile_ctx *t, const section *sec, int with_dx, int *n)
+{
+    const vs_footprint *fp = t->fp;
+    int a = (int)ceilf(sec->cx - t->rx0) - t->ox, b = (int)floorf(sec->cx + t->rx0) - t->ox;
+    if (a < 0) a = 0;
+    if (b > t->bw - 1) b = t->bw - 1;
+    *n = b - a + 1;
+    for (int x = a; x <= b; x++) {
+        float dx = (float)(x + t->ox) - sec->cx;
+        t->ex[x] = vs_fp_exp(fp, fp->A * dx * dx);
+        if (with_dx) t->exd[x] = t->ex[x] * dx;
+    }
+    return a;
+}
+
+/* A separable footprint laid out once per voxel: the column weights
+ * (t->ex, t->exd), and per buffer row its chord [xa, xb] and row weight.
+ * None of it depends on the sheet, so a voxel splatted into several sheets
+ * pays for it once; each sheet then costs one multiply-add per pixel. */
+typedef struct foot_rows {
+    int ya, yb;   /* rows touched (ya > yb: none)     */
+    rect box;     /* union of the chords              */
+} foot_rows;
+
+static void prepare_rows(const tile_ctx *t, const section *sec, int with_dx, foot_rows *fr)
+{
+    int n;
+    fr->ya = 1;
+    fr->yb = 0;
+    rect_clear(&fr->box);
+    row_weights(t, sec, with_dx, &n);
+    if (n <= 0 || !rows_of(t, sec, &fr->ya, &fr->yb)) {
+        fr->ya = 1;
+        fr->yb = 0;
+        return;
+    }
+    for (int y = fr->ya; y <= fr->yb; y++) {
+        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
+        int xa, xb;
+        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) {
+            t->rxa[y] = 1;
+            t->rxb[y] = 0;
+            continue;
+        }
+        t->rxa[y] = xa;
+        t->rxb[y] = xb;
+        t->rey[y] = vs_fp_exp(t->fp, er);
+        t->rdy[y] = dy;
+        grow(&fr->box, xa, xb, y);
+    }
+}
+
+static inline void merge_box(rect *bb, const rect *r)
+{
+    if (rect_empty(r)) return;
+    if (r->x0 < bb->x0) bb->x0 = r->x0;
+    if (r->y0 < bb->y0) bb->y0 = r->y0;
+    if (r->x1 > bb->x1) bb->x1 = r->x1;
+    if (r->y1 > bb->y1) bb->y1 = r->y1;
+}
+
+/* w: the voxel's weight times the slab's depth integral */
+static void splat_rows1(const tile_ctx *t, const foot_rows *fr, float w, float *q, rect *bb)
+{
+    const float *ex = t->ex;
+    for (int y = fr->ya; y <= fr->yb; y++) {
+        int xa = t->rxa[y], xb = t->rxb[y];
+        float wy = w * t->rey[y];
+        float *row = q + (size_t)y * t->bw;
+        for (int x = xa; x <= xb; x++) row[x] += wy * ex[x];
+    }
+    merge_box(bb, &fr->box);
+}
+
+static void splat_rows4(const tile_ctx *t, const foot_rows *fr, const float w[4], float *buf, rect *bb)
+{
+    const float *ex = t->ex;
+    for (int y = fr->ya; y <= fr->yb; y++) {
+        int xa = t->rxa[y], xb = t->rxb[y];
+        float ey = t->rey[y];
+        float w0 = w[0] * ey, w1 = w[1] * ey, w2 = w[2] * ey, w3 = w[3] * ey;
+        float *row = buf + (size_t)y * t->bw * 4;
+        for (int x = xa; x <= xb; x++) {
+            float h = ex[x];
+            float *p = row + 4 * x;
+            p[0] += w0 * h;
+            p[1] += w1 * h;
+            p[2] += w2 * h;
+            p[3] += w3 * h;
+        }
+    }
+    merge_box(bb, &fr->box);
+}
+
+/* Gradient splats, B = 0 and Qxz = 0 (the coupling terms vanish):
+ * wD = weight x depth integral, wE = weight x depth-derivative integral. */
+static void splat_rows_gs(const tile_ctx *t, const foot_rows *fr, float wD, float wE, float *buf, rect *bb)
+{
+    const vs_footprint *fp = t->fp;
+    const float *ex = t->ex, *exd = t->exd;
+    for (int y = fr->ya; y <= fr->yb; y++) {
+        int xa = t->rxa[y], xb = t->rxb[y];
+        float ey = t->rey[y];
+        float cq = wD * ey, cx = -2.0f * wD * fp->A * ey, cy = -2.0f * wD * fp->row_k * t->rdy[y] * ey;
+        float cz = wE * ey;
+        float *row = buf + (size_t)y * t->bw * 4;
+        for (int x = xa; x <= xb; x++) {
+            float h = ex[x];
+            float *p = row + 4 * x;
+            p[0] += cq * h;
+            p[1] += cx * exd[x];
+            p[2] += cy * h;
+            p[3] += cz * h;
+        }
+    }
+    merge_box(bb, &fr->box);
+}
+
 /* Density only (post-cd): one channel. */
 static void raster1(const tile_ctx *t, const section *sec, float w, float *q, rect *bb)
 {
@@ -116,6 +243,12 @@ static void raster1(const tile_ctx *t, const section *sec, float w, float *q, re
     int ya, yb;
     if (!rows_of(t, sec, &ya, &yb)) return;
     w *= sec->D;
+    if (fp->separable) {
+        foot_rows fr;
+        prepare_rows(t, sec, 0, &fr);
+        splat_rows1(t, &fr, w, q, bb);
+        return;
+    }
     for (int y = ya; y <= yb; y++) {
         float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
@@ -136,6 +269,12 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
     int ya, yb;
     if (!rows_of(t, sec, &ya, &yb)) return;
     float w[4] = {w4[0] * sec->D, w4[1] * sec->D, w4[2] * sec->D, w4[3] * sec->D};
+    if (fp->separable) {
+        foot_rows fr;
+        prepare_rows(t, sec, 0, &fr);
+        splat_rows4(t, &fr, w, buf, bb);
+        return;
+    }
     for (int y = ya; y <= yb; y++) {
         float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
@@ -166,6 +305,12 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
     float wD = w * sec->D, wE = w * sec->E;
     float A = fp->A, B = fp->B, rk = fp->row_k;
     float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
+    if (fp->separable) {
+        foot_rows fr;
+        prepare_rows(t, sec, 1, &fr);
+        splat_rows_gs(t, &fr, wD, wE, buf, bb);
+        return;
+    }
     for (int y = ya; y <= yb; y++) {
         float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
@@ -286,6 +431,58 @@ static void rasterize_sheet(const tile_ctx *t, active_list *al, int k, float *ds
     al->ws->ms_rasterize += vs_now_ms() - t0;
 }
 
+/* Separable footprints, voxel at a time: when sheet `a` opens, each voxel
+ * starting there is tested once against the occlusion map and then splatted
+ * into every sheet its kernel reaches (a..kl), reusing its row weights.  The
+ * sheets live in a ring of R buffers (sheet k in slot (k - kbase) mod R).
+ * Every sheet still receives its voxels in (first sheet, voxel) order, so
+ * the sums are those of the sheet-at-a-time loop, bit for bit. */
+static void activate_sheet(const tile_ctx *t, active_list *al, int a, float *const *ring, rect *bbs, int R,
+                           int kbase)
+{
+    const vs_frame *F = t->F;
+    const vs_settings *s = F->s;
+    double t0 = vs_now_ms();
+    const float bscale = (float)(F->fp.b / F->fp.slab);
+    while (al->next_new < al->n && al->kf[al->order[al->next_new]] == a) {
+        int e = al->order[al->next_new++];
+        uint32_t v = al->ent[e];
+        float x = F->vx[v], y = F->vy[v], z = F->vz[v];
+        if (s->occlusion && *al->opaque > 0 && footprint_occluded(t, al->sat, x, y)) {
+            al->ws->culled += (uint64_t)(al->kl[e] - a + 1);
+            continue;
+        }
+        section sec;
+        sec.cx = x;
+        sec.cy = y;
+        foot_rows fr;
+        prepare_rows(t, &sec, F->pipeline == VS_PIPELINE_POST_GS, &fr);
+        if (fr.ya > fr.yb) continue;
+        float val = F->rel->voxels[v].value;
+        float w4[4] = {0, 0, 0, 0};
+        if (F->payload) {
+            const float *pl = F->payload + 4 * (size_t)v;
+            for (int c = 0; c < 4; c++) w4[c] = pl[c] * bscale;
+        }
+        for (int k = a; k <= al->kl[e]; k++) {
+            if (!make_section(t, x, y, z, k, &sec)) continue;
+            al->ws->splatted++;
+            int slot = (k - kbase) % R;
+            switch (F->pipeline) {
+            case VS_PIPELINE_POST_CD: splat_rows1(t, &fr, val * bscale * sec.D, ring[slot], &bbs[slot]); break;
+            case VS_PIPELINE_POST_GS:
+                splat_rows_gs(t, &fr, val * bscale * sec.D, val * bscale * sec.E, ring[slot], &bbs[slot]);
+                break;
+            default: {
+                float wk[4] = {w4[0] * sec.D, w4[1] * sec.D, w4[2] * sec.D, w4[3] * sec.D};
+                splat_rows4(t, &fr, wk, ring[slot], &bbs[slot]);
+            }
+            }
+        }
+    }
+    al->ws->ms_rasterize += vs_now_ms() - t0;
+}
+
 static inline float lookup_corr(const vs_frame *F, const float *table, float v)
 {
     const vs_classify *c = F->cls;
@@ -372,13 +569,19 @@ void vs_tile_render(void *arg, int worker, int task)
     {
         double det = (double)F->fp.A * F->fp.C - (double)F->fp.B * F->fp.B;
         t.ry0 = (float)sqrt(F->fp.emax * F->fp.A / det);
+        t.rx0 = (float)sqrt(F->fp.emax * F->fp.C / det);
     }
+    t.ex = malloc((size_t)t.bw * 2 * sizeof(float));
+    t.exd = t.ex ? t.ex + t.bw : NULL;
+    t.rxa = malloc((size_t)t.bh * 2 * sizeof(int));
+    t.rxb = t.rxa ? t.rxa + t.bh : NULL;
+    t.rey = malloc((size_t)t.bh * 2 * sizeof(float));
+    t.rdy = t.rey ? t.rey + t.bh : NULL;
     const int npix = t.tw * t.th;
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
     const int n = (int)(F->tile_start[task + 1] - F->tile_start[task]);
     const vs_pipeline pl = F->pipeline;
     const int ch = pl == VS_PIPELINE_POST_CD ? 1 : 4;
-    const int nsheet = pl == VS_PIPELINE_POST_CD ? 3 : 1;
     const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
     const float thr = (float)s->occlusion_threshold;
 
@@ -387,11 +590,13 @@ void vs_tile_render(void *arg, int worker, int task)
     int *kl = malloc((size_t)(n ? n : 1) * sizeof(int));
     int *order = malloc((size_t)(n ? n : 1) * sizeof(int));
     int *active = malloc((size_t)(n ? n : 1) * sizeof(int));
-    float *sheets = calloc((size_t)nsheet * ch * t.bw * t.bh, sizeof(float));
+    float *sheets = NULL;
+    float **ring = NULL;
+    rect *bbox = NULL;
     shade_buf sb = {malloc((size_t)npix * sizeof(float)), malloc((size_t)npix * 3 * sizeof(float))};
     int *bucket = NULL;
     int *sat = calloc((size_t)(t.tw + 1) * (t.th + 1), sizeof(int));
-    if (!sat || !acc || !kf || !kl || !order || !active || !sheets || !sb.alpha || !sb.g) {
+    if (!t.ex || !t.rxa || !t.rey || !sat || !acc || !kf || !kl || !order || !active || !sb.alpha || !sb.g) {
         atomic_store(&F->error, 1);
         goto done;
     }
@@ -417,22 +622,49 @@ void vs_tile_render(void *arg, int worker, int task)
         for (int e = 0; e < n; e++) order[bucket[kf[e] - kmin]++] = e; /* stable */
     }
 
-    rect bbox[3];
-    for (int i = 0; i < 3; i++) rect_clear(&bbox[i]);
-    float *buf[3] = {sheets, sheets + (size_t)ch * t.bw * t.bh, sheets + (size_t)2 * ch * t.bw * t.bh};
+    /* Sheet buffers: voxel-at-a-time for separable footprints (a ring that
+     * holds every sheet a kernel reaches, plus the neighbours central
+     * differences read), else sheet-at-a-time with three buffers. */
+    int span = 1;
+    for (int e = 0; e < n; e++)
+        if (kl[e] - kf[e] + 1 > span) span = kl[e] - kf[e] + 1;
+    const int multi = F->fp.separable && span <= 64;
+    const int R = multi ? span + 2 : 3;
+    sheets = calloc((size_t)R * ch * t.bw * t.bh, sizeof(float));
+    ring = malloc((size_t)R * sizeof *ring);
+    bbox = malloc((size_t)R * sizeof *bbox);
+    if (!sheets || !ring || !bbox) {
+        atomic_store(&F->error, 1);
+        goto done;
+    }
+    for (int i = 0; i < R; i++) {
+        ring[i] = sheets + (size_t)i * ch * t.bw * t.bh;
+        rect_clear(&bbox[i]);
+    }
+    const int kbase = kmin - 1; /* slot of sheet k: (k - kbase) % R, never negative */
     int opaque = 0, opaque_in_sat = 0;
     active_list al = {ent, n, kf, kl, order, active, 0, 0, acc, sat, &opaque, ws};
     const rect own = {1, 1, t.tw + 1, t.th + 1};
 
-    int cur = 0, prev = 2, nxt = 1;
-    if (n > 0 && pl == VS_PIPELINE_POST_CD) rasterize_sheet(&t, &al, kmin, buf[cur], &bbox[cur]);
+    /* post-cd shades sheet k once k + 1 is complete */
+    const int ahead = pl == VS_PIPELINE_POST_CD ? 1 : 0;
+    for (int k = kmin - ahead; n > 0 && k < kmin; k++) {
+        if (multi)
+            activate_sheet(&t, &al, k + ahead, ring, bbox, R, kbase);
+        else
+            rasterize_sheet(&t, &al, k + ahead, ring[(k + ahead - kbase) % R], &bbox[(k + ahead - kbase) % R]);
+    }
     for (int k = kmin; n > 0 && k <= kmax; k++) {
         if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) break;
-        if (pl == VS_PIPELINE_POST_CD) {
-            if (k + 1 <= kmax) rasterize_sheet(&t, &al, k + 1, buf[nxt], &bbox[nxt]);
-        } else {
-            rasterize_sheet(&t, &al, k, buf[cur], &bbox[cur]);
+        const int cur = (k - kbase) % R, prev = (k - 1 - kbase) % R, nxt = (k + 1 - kbase) % R;
+        const int opening = k + ahead;
+        if (opening <= kmax) {
+            if (multi)
+                activate_sheet(&t, &al, opening, ring, bbox, R, kbase);
+            else
+                rasterize_sheet(&t, &al, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R]);
         }
+        float *const *buf = ring;
         ws->tiles_total++;
         ws->sheets++;
         /* tile counter: only the touched part of the sheet is shaded */
@@ -533,18 +765,10 @@ void vs_tile_render(void *arg, int worker, int task)
             ws->ms_shade += t2 - t1;
             ws->ms_composite += t3 - t2;
         }
-        /* retire the sheet */
-        if (pl == VS_PIPELINE_POST_CD) {
-            clear_rect(buf[prev], t.bw, ch, &bbox[prev]);
-            rect_clear(&bbox[prev]);
-            int old = prev;
-            prev = cur;
-            cur = nxt;
-            nxt = old;
-        } else {
-            clear_rect(buf[cur], t.bw, ch, &bbox[cur]);
-            rect_clear(&bbox[cur]);
-        }
+        /* retire the sheet no later sheet reads */
+        int done_slot = pl == VS_PIPELINE_POST_CD ? prev : cur;
+        clear_rect(ring[done_slot], t.bw, ch, &bbox[done_slot]);
+        rect_clear(&bbox[done_slot]);
         if (s->occlusion && opaque >= npix) break; /* tile early termination */
     }
 
@@ -562,9 +786,14 @@ done:
     free(order);
     free(active);
     free(sheets);
+    free(ring);
+    free(bbox);
     free(sb.alpha);
     free(sb.g);
     free(bucket);
     free(sat);
+    free(t.ex);
+    free(t.rxa);
+    free(t.rey);
     atomic_fetch_add(&F->tiles_done, 1);
 }
