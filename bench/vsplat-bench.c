@@ -1,0 +1,129 @@
+/* vsplat-bench: timings of the vsplat library (bench/README.md).
+ *
+ *   vsplat-bench table1|error|scaling|growth|all [--quick] [--out DIR] [--data DIR]
+ *                [--runs N] [--threads N] [--no-plot]
+ *   vsplat-bench frame INPUT [vsplat render options] [--frames K]
+ *
+ * Exit codes: 0 success, 1 usage error, 2 a case failed. */
+#include "bench.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: vsplat-bench MODE [options]\n"
+            "modes:\n"
+            "  table1    the paper's Table 1 (stage times per image and pipeline) and speedups over it\n"
+            "  error     error (RMSE, PSNR, SSIM, edge width) against run time, Pareto front marked *\n"
+            "  scaling   frame time for 1..N threads (and 2N), pinned and not, speedups\n"
+            "  growth    frame time against relevant voxels and against image size, log-log slopes\n"
+            "  all       table1, error, scaling, growth\n"
+            "  frame INPUT [vsplat render options] [--frames K]\n"
+            "            K frames turning the azimuth by 360/K, the iso-change time and peak memory:\n"
+            "            prints one line median_ms=... min_ms=... max_ms=... iso_change_ms=... peak_mb=...\n"
+            "options (all modes but frame):\n"
+            "  --quick         small images, fewer runs and rows (all --quick stays under two minutes)\n"
+            "  --out DIR       results folder for CSV, plot data and PNG plots (default bench/results)\n"
+            "  --data DIR      folder of the real volumes (default $VSPLAT_DATA, else the source tree's\n"
+            "                  ../shared/data); cases whose file is absent are skipped\n"
+            "  --runs N        timed runs per configuration (default 5, scaling 5, error 3; quick 1-2)\n"
+            "  --threads N     thread count of the N-thread rows (default 0 = one per core)\n"
+            "  --no-plot       write the gnuplot scripts but do not run gnuplot\n");
+}
+
+static int to_int(const char *s, int lo, int hi, int *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (!*s || *end || errno || v < lo || v > hi) return 0;
+    *out = (int)v;
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 1;
+    }
+    const char *mode = argv[1];
+    if (!strcmp(mode, "--help") || !strcmp(mode, "-h") || !strcmp(mode, "help")) {
+        usage(stdout);
+        return 0;
+    }
+    bench_opts o;
+    memset(&o, 0, sizeof o);
+    o.out_dir = "bench/results";
+    o.plot = 1;
+    const char *data = NULL;
+
+    if (!strcmp(mode, "frame")) {
+        /* frame parses the render options itself; --data is not used (INPUT is a path) */
+        o.data_dir = bench_data_dir(NULL);
+        return bench_frame(&o, argc - 2, argv + 2);
+    }
+
+    for (int i = 2; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--quick")) {
+            o.quick = 1;
+        } else if (!strcmp(a, "--no-plot")) {
+            o.plot = 0;
+        } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--out") || !strcmp(a, "--data") || !strcmp(a, "--runs") || !strcmp(a, "--threads")) {
+            if (!v) {
+                fprintf(stderr, "vsplat-bench: %s: missing value\n", a);
+                return 1;
+            }
+            i++;
+            if (!strcmp(a, "--out")) {
+                if (!*v) {
+                    fprintf(stderr, "vsplat-bench: --out: empty folder name\n");
+                    return 1;
+                }
+                o.out_dir = v;
+            } else if (!strcmp(a, "--data")) {
+                data = v;
+            } else if (!strcmp(a, "--runs")) {
+                if (!to_int(v, 1, 1000, &o.runs)) {
+                    fprintf(stderr, "vsplat-bench: --runs: expected an integer in 1..1000, got '%s'\n", v);
+                    return 1;
+                }
+            } else if (!to_int(v, 0, 256, &o.threads)) {
+                fprintf(stderr, "vsplat-bench: --threads: expected an integer in 0..256, got '%s'\n", v);
+                return 1;
+            }
+        } else {
+            fprintf(stderr, "vsplat-bench: %s: unknown option (see vsplat-bench --help)\n", a);
+            return 1;
+        }
+    }
+    o.data_dir = bench_data_dir(data);
+
+    int (*run[4])(const bench_opts *) = {bench_table1, bench_error, bench_scaling, bench_growth};
+    const char *names[4] = {"table1", "error", "scaling", "growth"};
+    int rc = 0, known = 0;
+    double t0 = bench_now_ms();
+    for (int m = 0; m < 4; m++) {
+        if (strcmp(mode, "all") && strcmp(mode, names[m])) continue;
+        known = 1;
+        if (!strcmp(mode, "all")) printf("\n==== vsplat-bench %s%s ====\n", names[m], o.quick ? " --quick" : "");
+        fflush(stdout);
+        int r = run[m](&o);
+        fflush(stdout);
+        if (r > rc) rc = r;
+    }
+    if (!known) {
+        fprintf(stderr, "vsplat-bench: %s: unknown mode (table1, error, scaling, growth, frame, all)\n", mode);
+        return 1;
+    }
+    if (!strcmp(mode, "all")) printf("\nall: %.1f s\n", (bench_now_ms() - t0) / 1000.0);
+    return rc;
+}
