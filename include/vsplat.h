@@ -199,6 +199,33 @@ void vs_volume_range(const vs_volume *v, double *lo, double *hi);
 double vs_volume_default_iso(const vs_volume *v);
 int vs_volume_has_analytic(const vs_volume *v);
 
+/* ---- transfer-function files ---- */
+/* Read a transfer function into a malloc'ed array of piecewise-linear
+ * control points (free with vs_tf_free), ready for vs_settings.tf/tf_count.
+ * Format from the extension (else sniffed from the content):
+ *  .json  ParaView colour-map preset: an array of presets (the first is
+ *         used) or one object.  "RGBPoints" [x,r,g,b,...] gives the colour
+ *         (interpolated in RGB whatever "ColorSpace" says); "Points"
+ *         [x,opacity,midpoint,sharpness,...] the opacity, shaped as
+ *         vtkPiecewiseFunction does; without "Points" opacity rises linearly
+ *         from 0 at the first RGB point to 1 at the last.  x is in data
+ *         units, not rescaled.  ParaView's per-sample opacity is taken as
+ *         vsplat's opacity per unit length (one voxel) directly.
+ *  .1dt   ImageVis3D: entry count N, then N lines "r g b a" in [0,1].  It has
+ *         no value axis: entry i is placed at vmin + i*(vmax-vmin)/(N-1) of
+ *         the volume's value range, so it needs vs_tf_load_for_volume.
+ *  .vtf   vsplat text: '#' comments; lines "iso LO HI R G B A RAMP" (an
+ *         iso-range with the --iso/--ramp opacity rule, peak opacity A, HI
+ *         may be inf; ranges must not overlap) or "point V R G B A".
+ * Colours and opacities must lie in [0,1] and x must not decrease; anything
+ * malformed is VS_ERR_FORMAT with a message naming the file and the line
+ * (or JSON element).  At most 65536 points; files up to 16 MiB.
+ * vs_tf_load is vs_tf_load_for_volume with vol = NULL (.1dt then fails). */
+vs_status vs_tf_load(vs_context *ctx, const char *path, vs_tf_point **points, int *count);
+vs_status vs_tf_load_for_volume(vs_context *ctx, const char *path, const vs_volume *vol,
+                                vs_tf_point **points, int *count);
+void vs_tf_free(vs_tf_point *points);
+
 /* ---- rendering ---- */
 vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s,
                     vs_image *out, vs_stats *stats);
@@ -209,6 +236,13 @@ void vs_image_free(vs_image *img);
  * (float), .tif/.tiff.  Written to a temporary name and renamed. */
 vs_status vs_image_write(vs_context *ctx, const char *path, const vs_image *img, int bits);
 vs_status vs_image_read(vs_context *ctx, const char *path, vs_image *out);
+
+/* Several images of one size as one file: an animated GIF (.gif: 8-bit,
+ * composited over black because GIF has no partial transparency, fps frames
+ * per second, looping forever) or a multi-page TIFF (.tif/.tiff, 8-bit
+ * RGBA).  Written to a temporary name and renamed, like vs_image_write. */
+vs_status vs_image_write_frames(vs_context *ctx, const char *path, const vs_image *frames, int count,
+                                double fps);
 
 typedef struct vs_image_diff {
     double rmse, psnr, ssim, max_abs;

@@ -11,6 +11,7 @@ PACKAGES=(
     build-essential gcc g++ make cmake pkg-config
     libopenimageio-dev openimageio-tools
     libhwloc-dev libteem-dev libnifti2-dev zlib1g-dev
+    libcjson-dev  # ParaView colour-map presets (--tf FILE.json)
     mricron-data  # the Colin27 demo head (ch2.nii.gz)
     gnuplot-nox
     clang libclang-rt-14-dev valgrind  # sanitizers, fuzzers, memcheck
