@@ -464,4 +464,88 @@ vs_status vs_oiio_write_pages(const char *path, int width, int height, int chann
     }
 }
 
+vs_status vs_oiio_write_frames(const char *path, int width, int height, int count,
+                               const float *const *frames, double fps, char *err, size_t errcap)
+{
+    if (!path || !frames) return fail(err, errcap, VS_ERR_INVALID_ARGUMENT, "image: NULL argument");
+    std::string name = path;
+    if (width < 1 || height < 1 || width > VS_MAX_IMAGE_DIM || height > VS_MAX_IMAGE_DIM || count < 1)
+        return fail(err, errcap, VS_ERR_INVALID_ARGUMENT, name + ": invalid image size or frame count");
+    if (!(fps > 0.0 && fps <= 1000.0))
+        return fail(err, errcap, VS_ERR_INVALID_ARGUMENT, name + ": frames per second must lie in (0, 1000]");
+    for (int f = 0; f < count; f++)
+        if (!frames[f])
+            return fail(err, errcap, VS_ERR_INVALID_ARGUMENT, name + ": frame " + std::to_string(f) + " is NULL");
+    try {
+        std::string ext = lower_ext(name);
+        bool gif = ext == "gif";
+        if (!gif && ext != "tif" && ext != "tiff")
+            return fail(err, errcap, VS_ERR_UNSUPPORTED,
+                        name + ": unsupported multi-frame format (use .gif or .tif/.tiff)");
+        // GIF: RGB composited over black (no partial transparency there);
+        // TIFF: straight RGBA.  Both 8-bit.
+        int nc = gif ? 3 : 4;
+        ImageSpec spec(width, height, nc, TypeDesc::UINT8);
+        if (gif) {
+            int rate[2] = {(int)std::lround(fps * 1000.0), 1000};
+            spec.attribute("FramesPerSecond", TypeRational, rate);
+            spec.attribute("gif:LoopCount", 0); // loop forever
+        } else {
+            spec.alpha_channel = 3;
+            spec.attribute("oiio:UnassociatedAlpha", 1);
+        }
+        std::string tmp = temp_name(name);
+        std::string werr;
+        {
+            auto out = ImageOutput::create(tmp);
+            if (!out) {
+                werr = output_error(nullptr);
+            } else if (count > 1 && !(out->supports("multiimage") && out->supports("appendsubimage"))) {
+                werr = std::string("format '") + out->format_name() + "' cannot hold several frames";
+            } else {
+                std::vector<ImageSpec> specs((size_t)count, spec);
+                bool ok = count > 1 ? out->open(tmp, count, specs.data()) : out->open(tmp, spec);
+                if (!ok) werr = output_error(out.get());
+                size_t npix = (size_t)width * height;
+                std::vector<unsigned char> px(npix * nc);
+                for (int f = 0; ok && f < count; f++) {
+                    if (f > 0 && !out->open(tmp, spec, ImageOutput::AppendSubimage)) {
+                        werr = output_error(out.get());
+                        break;
+                    }
+                    const float *src = frames[f];
+                    for (size_t i = 0; i < npix; i++) {
+                        float a = src[i * 4 + 3];
+                        a = std::isnan(a) ? 0.0f : (a < 0.0f ? 0.0f : (a > 1.0f ? 1.0f : a));
+                        for (int c = 0; c < nc; c++) {
+                            float v = c == 3 ? a : src[i * 4 + c];
+                            if (std::isnan(v)) v = 0.0f;
+                            v = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
+                            if (gif) v *= a; // over black
+                            px[i * nc + c] = (unsigned char)std::lround(v * 255.0f);
+                        }
+                    }
+                    if (!out->write_image(TypeDesc::UINT8, px.data())) {
+                        werr = output_error(out.get());
+                        break;
+                    }
+                }
+                if (ok && werr.empty()) {
+                    if (!out->close()) werr = output_error(out.get());
+                } else {
+                    out->close();
+                    (void)out->geterror();
+                }
+            }
+        }
+        return commit_or_cleanup(name, tmp, werr, err, errcap);
+    } catch (const std::bad_alloc &) {
+        return fail(err, errcap, VS_ERR_OUT_OF_MEMORY, name + ": out of memory");
+    } catch (const std::exception &e) {
+        return fail(err, errcap, VS_ERR_IO, name + ": cannot write: " + e.what());
+    } catch (...) {
+        return fail(err, errcap, VS_ERR_INTERNAL, name + ": unknown exception");
+    }
+}
+
 } // extern "C"

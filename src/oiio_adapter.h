@@ -68,6 +68,14 @@ vs_status vs_oiio_write_pages(const char *path, int width, int height, int chann
                               double xres, double yres, const char *description,
                               char *err, size_t errcap);
 
+/* Write `count` frames of straight RGBA float (width*height*4 each) as one
+ * multi-image file: an animated GIF (.gif: 8-bit RGB composited over black,
+ * as GIF has no partial transparency; FramesPerSecond = fps, looping
+ * forever) or a multi-page TIFF (.tif/.tiff: 8-bit straight RGBA).  One
+ * frame at a time is converted.  Same temporary-file-and-rename rule. */
+vs_status vs_oiio_write_frames(const char *path, int width, int height, int count,
+                               const float *const *frames, double fps, char *err, size_t errcap);
+
 #ifdef __cplusplus
 }
 #endif

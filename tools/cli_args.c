@@ -79,7 +79,8 @@ enum opt_id {
     O_TF, O_SIZE, O_VIEW, O_ZOOM, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
-    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_QUIET
+    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_QUIET,
+    O_TURNTABLE, O_FPS
 };
 
 typedef struct opt_def {
@@ -102,6 +103,8 @@ static const opt_def opt_table[] = {
     {"--material", 1, O_MATERIAL, 0},
     {"--background", 1, O_BACKGROUND, 0},
     {"--tf", 1, O_TF, 0},
+    {"--turntable", 1, O_TURNTABLE, 0},
+    {"--fps", 1, O_FPS, 0},
     {"--size", 1, O_SIZE, 0},
     {"--view", 1, O_VIEW, 0},
     {"--zoom", 1, O_ZOOM, 0},
@@ -277,6 +280,7 @@ static int parse_spacing(const char *v, vs_load_options *l, char *err, size_t ca
 
 typedef struct seen {
     int dims, type, endian, spacing;
+    int iso, ramp, opacity, material, bits, fps; /* conflicts with --tf, GIF */
 } seen;
 
 static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *err, size_t cap)
@@ -295,17 +299,23 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
         if (vs_pipeline_parse(v, &s->pipeline) != VS_OK)
             return fail(err, cap, "--pipeline: expected pre, post-cd, post-gs, post-alpha or raycast, got '%s'", v);
         return 0;
-    case O_ISO: return parse_iso(v, s, err, cap);
-    case O_RAMP: return parse_range_double(n, v, 0.0, 1e300, 0, &s->ramp, err, cap);
+    case O_ISO: sn->iso = 1; return parse_iso(v, s, err, cap);
+    case O_RAMP: sn->ramp = 1; return parse_range_double(n, v, 0.0, 1e300, 0, &s->ramp, err, cap);
     case O_OPACITY: {
         double a;
+        sn->opacity = 1;
         if (parse_range_double(n, v, 0.0, 1.0, 0, &a, err, cap)) return 1;
         s->iso_opacity = (float)a;
         return 0;
     }
-    case O_MATERIAL: return parse_color(n, v, 3, s->material, err, cap);
+    case O_MATERIAL: sn->material = 1; return parse_color(n, v, 3, s->material, err, cap);
     case O_BACKGROUND: return parse_color(n, v, 4, s->background, err, cap);
-    case O_TF: return fail(err, cap, "--tf: transfer-function files are not supported yet");
+    case O_TF:
+        if (!*v) return fail(err, cap, "--tf: expected a file name (.json, .1dt or .vtf)");
+        o->tf_path = v;
+        return 0;
+    case O_TURNTABLE: return parse_range_int(n, v, 1, 3600, &o->turntable, err, cap);
+    case O_FPS: sn->fps = 1; return parse_range_double(n, v, 0.0, 100.0, 1, &o->fps, err, cap);
     case O_SIZE: return parse_size(v, s, err, cap);
     case O_VIEW:
         if (!to_doubles(v, 2, t)) return fail(err, cap, "--view: expected AZ,EL in degrees, got '%s'", v);
@@ -366,6 +376,7 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
         else return fail(err, cap, "--endian: expected little or big, got '%s'", v);
         return 0;
     case O_BITS:
+        sn->bits = 1;
         if (strcmp(v, "8") && strcmp(v, "16")) return fail(err, cap, "--bits: expected 8 or 16, got '%s'", v);
         o->bits = atoi(v);
         return 0;
@@ -398,7 +409,9 @@ static int parse_common(int argc, char **argv, cli_opts *o, int is_info, char *e
     o->bits = 8;
     if (!is_info && env_defaults(&o->s, err, cap)) return 1;
 
-    seen sn = {0, 0, 0, 0};
+    seen sn;
+    memset(&sn, 0, sizeof sn);
+    o->fps = 15.0;
     int only_positional = 0;
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i];
@@ -442,9 +455,22 @@ static int parse_common(int argc, char **argv, cli_opts *o, int is_info, char *e
     o->load.raw = sn.dims;
 
     if (!is_info) {
-        if (!o->output) return fail(err, cap, "no output: give -o OUT (.png, .exr, .tif or .tiff)");
-        if (!cli_output_format(o->output))
-            return fail(err, cap, "%s: unknown image format (use .png, .exr, .tif or .tiff)", o->output);
+        if (!o->output) return fail(err, cap, "no output: give -o OUT (.png, .exr, .tif, .tiff or .gif)");
+        const char *fmt = cli_output_format(o->output);
+        if (!fmt)
+            return fail(err, cap, "%s: unknown image format (use .png, .exr, .tif, .tiff or .gif)", o->output);
+        if (o->tf_path && (sn.iso || sn.ramp || sn.opacity || sn.material))
+            return fail(err, cap, "--tf %s replaces --iso, --ramp, --opacity and --material: give one or the other",
+                        o->tf_path);
+        if (!strcmp(fmt, "gif") && sn.bits && o->bits != 8)
+            return fail(err, cap, "--bits %d: GIF output is 8-bit", o->bits);
+        if (sn.fps && strcmp(fmt, "gif"))
+            return fail(err, cap, "--fps applies to animated GIF output (-o OUT.gif) only");
+        if (o->turntable && strcmp(fmt, "gif")) {
+            char probe[4096];
+            if (cli_frame_name(o->output, o->turntable - 1, probe, sizeof probe))
+                return fail(err, cap, "%s: path too long for the turntable frame names", o->output);
+        }
         if (o->stats_path && !strcmp(o->stats_path, o->output))
             return fail(err, cap, "--stats: %s is also the output image", o->stats_path);
     }
@@ -471,7 +497,18 @@ const char *cli_output_format(const char *path)
     if (!strcasecmp(dot, ".png")) return "png";
     if (!strcasecmp(dot, ".exr")) return "exr";
     if (!strcasecmp(dot, ".tif") || !strcasecmp(dot, ".tiff")) return "tiff";
+    if (!strcasecmp(dot, ".gif")) return "gif";
     return NULL;
+}
+
+int cli_frame_name(const char *out, int frame, char *buf, size_t cap)
+{
+    const char *slash = strrchr(out, '/');
+    const char *base = slash ? slash + 1 : out;
+    const char *dot = strrchr(base, '.');
+    size_t stem = dot && dot != base ? (size_t)(dot - out) : strlen(out);
+    int n = snprintf(buf, cap, "%.*s_%04d%s", (int)stem, out, frame, out + stem);
+    return n < 0 || (size_t)n >= cap ? 1 : 0;
 }
 
 /* ---- usage ---- */
@@ -508,7 +545,7 @@ void cli_render_usage(FILE *f)
             "  --endian little|big    raw byte order (default little)\n"
             "  --spacing SX,SY,SZ     voxel spacing (overrides the file's)\n"
             "output:\n"
-            "  -o OUT                 image; format from the extension: .png, .exr, .tif, .tiff\n"
+            "  -o OUT                 image; format from the extension: .png, .exr, .tif, .tiff, .gif\n"
             "  --bits 8|16            PNG bit depth (default 8)\n"
             "  --stats FILE.json      per-stage timings and counts as JSON\n"
             "  --print-stats          per-stage timing table on stdout\n"
@@ -520,12 +557,17 @@ void cli_render_usage(FILE *f)
             "  --opacity A            opacity inside the iso-range, 0..1 (default 1)\n"
             "  --material R,G,B       material colour, 0..1 (default 1,1,1)\n"
             "  --background R,G,B,A   background, 0..1 (default 0,0,0,0)\n"
-            "  --tf FILE              transfer-function file (not supported yet)\n"
+            "  --tf FILE              transfer function: ParaView preset .json, ImageVis3D .1dt\n"
+            "                         (spread over the data range) or vsplat .vtf (iso LO HI R G B A RAMP);\n"
+            "                         replaces --iso/--ramp/--opacity/--material\n"
             "view:\n"
             "  --size WxH             image size (default 512x512)\n"
             "  --view AZ,EL           azimuth, elevation in degrees (default 0,0)\n"
             "  --zoom Z               largest extent spans Z of the image width (default 0.8)\n"
             "  --center X,Y,Z         image centre in voxel coordinates (default: volume centre)\n"
+            "  --turntable N          N frames, azimuth stepping 360/N from --view: OUT_0000.ext ...,\n"
+            "                         or one animated GIF if OUT ends in .gif\n"
+            "  --fps F                frames per second of an animated GIF (default 15)\n"
             "kernel and sheets:\n"
             "  --slab DS              sheet thickness in voxel units, 0.05..64 (default 1)\n"
             "  --kernel-radius R      Gaussian kernel radius, 0.5..8 (default 2)\n"

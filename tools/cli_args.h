@@ -21,6 +21,9 @@ typedef struct cli_opts {
     int quiet;              /* -q                                         */
     int bits;               /* --bits 8|16 (PNG depth)                    */
     int help;               /* --help seen: print usage, exit 0           */
+    const char *tf_path;    /* --tf FILE (loaded once the volume is known) */
+    int turntable;          /* --turntable N: N frames, 0 = one image      */
+    double fps;             /* --fps F for animated GIF output            */
 } cli_opts;
 
 /* Parse `vsplat render` arguments (argv[0] is the first argument after
@@ -33,8 +36,12 @@ int cli_parse_render(int argc, char **argv, cli_opts *o, char *err, size_t errca
  * options (--dims, --type, --spacing, --endian).  Same return convention. */
 int cli_parse_info(int argc, char **argv, cli_opts *o, char *err, size_t errcap);
 
-/* Output format from the extension (.png, .exr, .tif, .tiff; any case):
- * returns a short name ("png", "exr", "tiff") or NULL if unknown. */
+/* Turntable frame name: OUT "dir/out.png", frame 3 -> "dir/out_0003.png".
+ * Returns 0, or 1 if it does not fit in cap. */
+int cli_frame_name(const char *out, int frame, char *buf, size_t cap);
+
+/* Output format from the extension (.png, .exr, .tif, .tiff, .gif; any
+ * case): returns a short name ("png", "exr", "tiff", "gif") or NULL. */
 const char *cli_output_format(const char *path);
 
 void cli_usage(FILE *f);        /* whole tool                      */

@@ -144,6 +144,120 @@ static void print_stats_table(const vs_stats *st)
     fflush(stdout); /* keep the table ahead of later stderr lines */
 }
 
+/* ---- rendering one image or a turntable ---- */
+
+static void remove_frames(const cli_opts *o, int n)
+{
+    char name[4200];
+    for (int f = 0; f < n; f++)
+        if (!cli_frame_name(o->output, f, name, sizeof name)) remove(name);
+}
+
+/* Renders o->turntable frames (or one image) and writes them: OUT itself,
+ * OUT_0000.ext ... for a turntable, or one animated GIF.  --stats gets the
+ * last frame's figures.  On failure nothing half-finished is left. */
+static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
+{
+    const int is_gif = !strcmp(cli_output_format(o->output), "gif");
+    const int nframes = o->turntable > 0 ? o->turntable : 1;
+    const int sequence = o->turntable > 0 && !is_gif;
+    const double az0 = o->s.azimuth;
+    vs_image *frames = NULL;
+    if (is_gif) {
+        double bytes = (double)nframes * o->s.width * o->s.height * 4.0 * sizeof(float);
+        if (bytes > 4.0 * 1024 * 1024 * 1024) {
+            fprintf(stderr, "vsplat: %s: %d frames of %dx%d need %.1f GiB for an animated GIF; "
+                            "write a PNG sequence (-o OUT.png) instead\n",
+                    o->output, nframes, o->s.width, o->s.height, bytes / (1024.0 * 1024 * 1024));
+            return EXIT_USAGE;
+        }
+        frames = calloc((size_t)nframes, sizeof *frames);
+        if (!frames) {
+            fprintf(stderr, "vsplat: %s: out of memory\n", o->output);
+            return EXIT_INTERNAL;
+        }
+    }
+    vs_stats stats;
+    memset(&stats, 0, sizeof stats);
+    double ms_all = 0.0;
+    int rc = 0, written = 0;
+    char name[4200];
+    for (int f = 0; f < nframes && !rc; f++) {
+        o->s.azimuth = az0 + 360.0 * f / nframes;
+        vs_image img = {0, 0, NULL};
+        vs_status st = vs_render(ctx, vol, &o->s, &img, &stats);
+        if (st != VS_OK) {
+            rc = report(ctx, st, o->scene ? o->scene : o->input);
+            vs_image_free(&img);
+            break;
+        }
+        ms_all += stats.ms_total;
+        if (is_gif) {
+            frames[f] = img;
+        } else if (sequence) {
+            cli_frame_name(o->output, f, name, sizeof name);
+            st = vs_image_write(ctx, name, &img, o->bits);
+            vs_image_free(&img);
+            if (st != VS_OK) rc = report(ctx, st, name);
+            else written++;
+        } else {
+            frames = malloc(sizeof *frames);
+            if (!frames) {
+                vs_image_free(&img);
+                fprintf(stderr, "vsplat: %s: out of memory\n", o->output);
+                rc = EXIT_INTERNAL;
+                break;
+            }
+            frames[0] = img;
+        }
+    }
+    if (sequence && rc) remove_frames(o, written);
+
+    char stats_tmp[4200] = "";
+    if (!rc && o->stats_path) {
+        rc = write_stats_tmp(&stats, o->stats_path, stats_tmp, sizeof stats_tmp);
+        if (rc && sequence) remove_frames(o, written);
+    }
+    if (!rc && !sequence) {
+        vs_status st = is_gif ? vs_image_write_frames(ctx, o->output, frames, nframes, o->fps)
+                              : vs_image_write(ctx, o->output, &frames[0], o->bits);
+        if (st != VS_OK) {
+            rc = report(ctx, st, o->output);
+            if (o->stats_path) remove(stats_tmp);
+        }
+    }
+    if (frames)
+        for (int f = 0; f < (is_gif ? nframes : 1); f++) vs_image_free(&frames[f]);
+    free(frames);
+    if (rc) return rc;
+    if (o->stats_path && rename(stats_tmp, o->stats_path) != 0) {
+        fprintf(stderr, "vsplat: %s: cannot write: %s\n", o->stats_path, strerror(errno));
+        remove(stats_tmp);
+        if (sequence) remove_frames(o, nframes);
+        else remove(o->output); /* no half-finished results */
+        return EXIT_USAGE;
+    }
+
+    if (o->print_stats) print_stats_table(&stats);
+    if (!o->quiet) {
+        const char *pipe = stats.pipeline ? stats.pipeline : vs_pipeline_name(o->s.pipeline);
+        if (sequence) {
+            char last[4200];
+            cli_frame_name(o->output, 0, name, sizeof name);
+            cli_frame_name(o->output, nframes - 1, last, sizeof last);
+            fprintf(stderr, "vsplat: wrote %s ... %s (%d frames, %dx%d, %s, %.1f ms)\n", name, last, nframes,
+                    stats.width, stats.height, pipe, ms_all);
+        } else if (nframes > 1) {
+            fprintf(stderr, "vsplat: wrote %s (%d frames, %dx%d, %s, %.1f ms)\n", o->output, nframes, stats.width,
+                    stats.height, pipe, ms_all);
+        } else {
+            fprintf(stderr, "vsplat: wrote %s (%dx%d, %s, %.1f ms)\n", o->output, stats.width, stats.height, pipe,
+                    stats.ms_total);
+        }
+    }
+    return 0;
+}
+
 /* ---- subcommands ---- */
 
 static int cmd_render(int argc, char **argv)
@@ -171,6 +285,21 @@ static int cmd_render(int argc, char **argv)
         return rc;
     }
 
+    /* --tf: the .1dt format needs the volume's value range, so load it now. */
+    vs_tf_point *tf = NULL;
+    if (o.tf_path) {
+        int n = 0;
+        st = vs_tf_load_for_volume(ctx, o.tf_path, vol, &tf, &n);
+        if (st != VS_OK) {
+            rc = report(ctx, st, o.tf_path);
+            vs_volume_release(vol);
+            vs_context_release(ctx);
+            return rc;
+        }
+        o.s.tf = tf;
+        o.s.tf_count = n;
+    }
+
     /* An iso-range outside the data is allowed (the image is blank), but say so. */
     if (o.s.has_iso && o.s.tf_count == 0 && !o.quiet) {
         double lo, hi;
@@ -181,48 +310,11 @@ static int cmd_render(int argc, char **argv)
                     o.s.iso_lo, o.s.iso_hi, lo, hi);
     }
 
-    vs_image img = {0, 0, NULL};
-    vs_stats stats;
-    memset(&stats, 0, sizeof stats);
-    st = vs_render(ctx, vol, &o.s, &img, &stats);
+    rc = render_and_write(ctx, vol, &o);
     vs_volume_release(vol);
-    if (st != VS_OK) {
-        rc = report(ctx, st, o.scene ? o.scene : o.input);
-        vs_image_free(&img);
-        vs_context_release(ctx);
-        return rc;
-    }
-
-    char stats_tmp[4200] = "";
-    if (o.stats_path) {
-        rc = write_stats_tmp(&stats, o.stats_path, stats_tmp, sizeof stats_tmp);
-        if (rc) {
-            vs_image_free(&img);
-            vs_context_release(ctx);
-            return rc;
-        }
-    }
-    st = vs_image_write(ctx, o.output, &img, o.bits);
-    vs_image_free(&img);
-    if (st != VS_OK) {
-        rc = report(ctx, st, o.output);
-        if (o.stats_path) remove(stats_tmp);
-        vs_context_release(ctx);
-        return rc;
-    }
+    vs_tf_free(tf);
     vs_context_release(ctx);
-    if (o.stats_path && rename(stats_tmp, o.stats_path) != 0) {
-        fprintf(stderr, "vsplat: %s: cannot write: %s\n", o.stats_path, strerror(errno));
-        remove(stats_tmp);
-        remove(o.output); /* no half-finished results */
-        return EXIT_USAGE;
-    }
-
-    if (o.print_stats) print_stats_table(&stats);
-    if (!o.quiet)
-        fprintf(stderr, "vsplat: wrote %s (%dx%d, %s, %.1f ms)\n", o.output, stats.width, stats.height,
-                stats.pipeline ? stats.pipeline : vs_pipeline_name(o.s.pipeline), stats.ms_total);
-    return 0;
+    return rc;
 }
 
 static int cmd_info(int argc, char **argv)
