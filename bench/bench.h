@@ -91,6 +91,8 @@ FILE *bench_result_open(const bench_opts *o, const char *name);
 void bench_result_path(const bench_opts *o, const char *name, char *buf, size_t cap);
 /* "model name" of the CPU and the logical CPU count, for headers. */
 const char *bench_machine(void);
+/* 1-minute load average (/proc/loadavg): a shared machine makes timings noisy. */
+const char *bench_loadavg(void);
 
 /* ---- plot.c ---- */
 /* Write OUT/NAME.gp (the script text, which must set its own output NAME.png

@@ -53,8 +53,8 @@ int bench_scaling(const bench_opts *o)
             }
     int failed = bench_run("scaling", cases, n, runs);
 
-    printf("\nScaling: %s, %dx%d, median ms over %d interleaved runs; %d logical CPUs; machine: %s\n", input, size,
-           size, runs, ncpu, bench_machine());
+    printf("\nScaling: %s, %dx%d, median ms over %d interleaved runs; %d logical CPUs; machine: %s; load average %s\n", input, size,
+           size, runs, ncpu, bench_machine(), bench_loadavg());
     printf("%-10s %-9s %7s %10s %21s %8s %s\n", "pipeline", "pinning", "threads", "median_ms", "min-max", "speedup",
            "note");
     if (bench_results_dir(o)) failed++;

@@ -170,8 +170,8 @@ int bench_table1(const bench_opts *o)
     char title[512];
     printf("\nTable 1 reproduced: median ms over %d interleaved run%s (paper: seconds on a 194 MHz R10000)\n",
            runs, runs == 1 ? "" : "s");
-    printf("%dx%d image, stage times on 1 thread, ISA %s; machine: %s\n", size, size,
-           vs_isa_name(vs_isa_detect()), bench_machine());
+    printf("%dx%d image, stage times on 1 thread, ISA %s; machine: %s; load average %s\n", size, size,
+           vs_isa_name(vs_isa_detect()), bench_machine(), bench_loadavg());
     snprintf(title, sizeof title, "-- milliseconds --");
     print_header(present, title);
     for (int r = 0; r < NROWS; r++) {

@@ -89,3 +89,16 @@ const char *bench_machine(void)
     snprintf(buf, sizeof buf, "%s, %d logical CPUs, ISA %s", model, bench_cpus(), vs_isa_name(vs_isa_detect()));
     return buf;
 }
+
+const char *bench_loadavg(void)
+{
+    static char buf[64];
+    snprintf(buf, sizeof buf, "?");
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f) {
+        double a = 0;
+        if (fscanf(f, "%lf", &a) == 1) snprintf(buf, sizeof buf, "%.2f", a);
+        fclose(f);
+    }
+    return buf;
+}
