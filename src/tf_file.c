@@ -245,17 +245,19 @@ static vs_status pv_numbers(const pv_ctx *pv, const cJSON *arr, const char *key,
     for (int k = 0; k < count; k++) {
         if (k % 4 == 0) {
             if (k > 0 && v[k] < v[k - 4]) {
+                double x = v[k], prev = v[k - 4];
                 free(v);
                 return vs_set_error(pv->ctx, VS_ERR_FORMAT,
                                     "%s: %s: \"%s\"[%d]: x = %g after %g: x values must not decrease", pv->path,
-                                    pv->where, key, k, v[k], v[k - 4]);
+                                    pv->where, key, k, x, prev);
             }
         } else if (!(v[k] >= 0.0 && v[k] <= 1.0)) {
             static const char *const rgb[3] = {"red", "green", "blue"};
             static const char *const pts[3] = {"opacity", "midpoint", "sharpness"};
+            double bad = v[k];
             free(v);
             return vs_set_error(pv->ctx, VS_ERR_FORMAT, "%s: %s: \"%s\"[%d]: %s %g is outside [0,1]", pv->path,
-                                pv->where, key, k, !strcmp(key, "Points") ? pts[k % 4 - 1] : rgb[k % 4 - 1], v[k]);
+                                pv->where, key, k, !strcmp(key, "Points") ? pts[k % 4 - 1] : rgb[k % 4 - 1], bad);
         }
     }
     *vals = v;
