@@ -47,7 +47,7 @@ void vs_footprint_free(vs_footprint *fp);
 static inline float vs_fp_exp(const vs_footprint *fp, float t)
 {
     float x = t * fp->exp_scale;
-    if (x >= (float)(fp->exp_n - 1)) return 0.0f; /* truncated */
+    if (!(x < (float)(fp->exp_n - 1))) return 0.0f; /* truncated (and NaN) */
     int i = (int)x;
     float f = x - (float)i;
     return fp->exp_table[i] + f * (fp->exp_table[i + 1] - fp->exp_table[i]);

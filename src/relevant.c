@@ -11,6 +11,7 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
     if (!rc) return;
     free(rc->voxels);
     free(rc->grad);
+    free(rc->bricks);
     free(rc);
 }
 
@@ -114,21 +115,69 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
         for (size_t i = 0; i < n; i++) mask[i] = (mask[i] & INSIDE) != 0;
     }
     free(line);
-    size_t count = 0;
-    for (size_t i = 0; i < n; i++) count += mask[i] != 0;
+    /* Compact brick by brick: count per brick, prefix sums, fill (the fill
+     * walks the grid in k, j, i order, so each brick is in that order too). */
+    const int nb[3] = {(d[0] + VS_BRICK - 1) / VS_BRICK, (d[1] + VS_BRICK - 1) / VS_BRICK,
+                       (d[2] + VS_BRICK - 1) / VS_BRICK};
+    size_t nbt = (size_t)nb[0] * nb[1] * nb[2];
+    uint32_t *pos = calloc(nbt + 1, sizeof *pos);
+    if (!pos) {
+        free(mask);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    }
+    size_t count = 0, idx = 0, nonempty = 0;
+    for (int k = 0; k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++, idx++)
+                if (mask[idx]) {
+                    pos[((size_t)(k / VS_BRICK) * nb[1] + j / VS_BRICK) * nb[0] + i / VS_BRICK]++;
+                    count++;
+                }
+    if (count > UINT32_MAX) {
+        free(mask);
+        free(pos);
+        return vs_set_error(ctx, VS_ERR_TOO_LARGE, "relevant voxels: %zu voxels exceed the limit", count);
+    }
+    for (size_t b = 0; b < nbt; b++) nonempty += pos[b] != 0;
     vs_voxel *vox = malloc((count ? count : 1) * sizeof *vox);
     float *grad = with_grad ? malloc((count ? count : 1) * 3 * sizeof(float)) : NULL;
-    if (!vox || (with_grad && !grad)) {
+    vs_brick *bricks = malloc((nonempty ? nonempty : 1) * sizeof *bricks);
+    if (!vox || (with_grad && !grad) || !bricks) {
         free(mask);
+        free(pos);
         free(vox);
         free(grad);
+        free(bricks);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
     }
-    size_t o = 0, idx = 0;
+    /* prefix sums: pos[b] becomes the first slot of brick b */
+    uint32_t run = 0;
+    size_t nbk = 0;
+    for (int bk = 0; bk < nb[2]; bk++)
+        for (int bj = 0; bj < nb[1]; bj++)
+            for (int bi = 0; bi < nb[0]; bi++) {
+                size_t b = ((size_t)bk * nb[1] + bj) * nb[0] + bi;
+                uint32_t nvox = pos[b];
+                pos[b] = run;
+                if (nvox) {
+                    vs_brick *br = &bricks[nbk++];
+                    br->start = run;
+                    br->count = nvox;
+                    br->i0 = (uint16_t)(bi * VS_BRICK);
+                    br->j0 = (uint16_t)(bj * VS_BRICK);
+                    br->k0 = (uint16_t)(bk * VS_BRICK);
+                    br->i1 = (uint16_t)((bi + 1) * VS_BRICK > d[0] ? d[0] - 1 : (bi + 1) * VS_BRICK - 1);
+                    br->j1 = (uint16_t)((bj + 1) * VS_BRICK > d[1] ? d[1] - 1 : (bj + 1) * VS_BRICK - 1);
+                    br->k1 = (uint16_t)((bk + 1) * VS_BRICK > d[2] ? d[2] - 1 : (bk + 1) * VS_BRICK - 1);
+                }
+                run += nvox;
+            }
+    idx = 0;
     for (int k = 0; k < d[2]; k++)
         for (int j = 0; j < d[1]; j++)
             for (int i = 0; i < d[0]; i++, idx++) {
                 if (!mask[idx]) continue;
+                size_t o = pos[((size_t)(k / VS_BRICK) * nb[1] + j / VS_BRICK) * nb[0] + i / VS_BRICK]++;
                 double v = vs_volume_at(vol, idx);
                 vox[o].i = (uint16_t)i;
                 vox[o].j = (uint16_t)j;
@@ -151,8 +200,10 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
                         grad[3 * o + a] = (float)g;
                     }
                 }
-                o++;
             }
+    free(pos);
+    rc->nbricks = nbk;
+    rc->bricks = bricks;
     free(mask);
     rc->count = count;
     rc->voxels = vox;

@@ -12,6 +12,15 @@ typedef struct vs_voxel {
     float value;           /* raw density                           */
 } vs_voxel;
 
+/* Voxels are stored brick by brick (VS_BRICK^3 grid cells) so a frame can
+ * project, bin and cull whole bricks before touching their voxels. */
+#define VS_BRICK 8
+typedef struct vs_brick {
+    uint32_t start, count;  /* range in the voxel list                     */
+    uint16_t i0, j0, k0;    /* lowest grid position of the brick's voxels   */
+    uint16_t i1, j1, k1;    /* highest                                      */
+} vs_brick;
+
 typedef struct vs_relevant_cache {
     /* key: what the list was built from */
     const struct vs_volume *vol;
@@ -20,10 +29,13 @@ typedef struct vs_relevant_cache {
     double alpha_lo, alpha_hi;
     int seam;
     int with_grad;
-    /* the list, ordered by k, then j, then i */
+    /* the list, brick by brick (bricks in k, j, i order), and inside a
+     * brick ordered by k, then j, then i */
     size_t count;
     vs_voxel *voxels;
     float *grad;           /* 3 per voxel, index units (with_grad only) */
+    size_t nbricks;
+    vs_brick *bricks;      /* non-empty bricks only                     */
     double build_ms;
 } vs_relevant_cache;
 

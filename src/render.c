@@ -16,16 +16,19 @@ typedef struct bin_job {
     int fill;          /* 0: transform + count, 1: fill */
 } bin_job;
 
-static inline int tile_range(const vs_frame *F, float x, float y, int *tx0, int *tx1, int *ty0, int *ty1)
+/* Tiles that a box of voxel centres [x0,x1] x [y0,y1] can reach with its
+ * footprints (and the central-difference seam). */
+static inline int tile_range(const vs_frame *F, float x0, float x1, float y0, float y1, int *tx0, int *tx1,
+                             int *ty0, int *ty1)
 {
     const int W = F->cam.width, H = F->cam.height;
-    if (!(x + F->pad_x >= 0.0f) || !(x - F->pad_x <= (float)(W - 1)) || !(y + F->pad_y >= 0.0f) ||
-        !(y - F->pad_y <= (float)(H - 1)))
+    if (!(x1 + F->pad_x >= 0.0f) || !(x0 - F->pad_x <= (float)(W - 1)) || !(y1 + F->pad_y >= 0.0f) ||
+        !(y0 - F->pad_y <= (float)(H - 1)))
         return 0; /* off screen (also rejects NaN) */
-    int a = (int)floorf((x - (float)F->pad_x) / (float)F->tile);
-    int b = (int)floorf((x + (float)F->pad_x) / (float)F->tile);
-    int c = (int)floorf((y - (float)F->pad_y) / (float)F->tile);
-    int d = (int)floorf((y + (float)F->pad_y) / (float)F->tile);
+    int a = (int)floorf((x0 - (float)F->pad_x) / (float)F->tile);
+    int b = (int)floorf((x1 + (float)F->pad_x) / (float)F->tile);
+    int c = (int)floorf((y0 - (float)F->pad_y) / (float)F->tile);
+    int d = (int)floorf((y1 + (float)F->pad_y) / (float)F->tile);
     *tx0 = a < 0 ? 0 : a;
     *tx1 = b >= F->tiles_x ? F->tiles_x - 1 : b;
     *ty0 = c < 0 ? 0 : c;
@@ -33,60 +36,46 @@ static inline int tile_range(const vs_frame *F, float x, float y, int *tx0, int 
     return 1;
 }
 
-/* Pre-shading of one voxel (pre and post-alpha): classified colour times the
- * Phong terms from its grid gradient, for this view. */
-static void preshade(const vs_frame *F, size_t v, float out[4])
-{
-    const vs_voxel *vx = &F->rel->voxels[v];
-    const struct vs_camera *cam = &F->cam;
-    float rgb[3], a;
-    vs_classify_eval(F->cls, F->s, vx->value, rgb, &a);
-    const float *g = F->rel->grad + 3 * v;
-    /* index units -> world (per mm) -> eye frame */
-    double gw[3];
-    for (int i = 0; i < 3; i++) gw[i] = g[i] / F->spacing[i];
-    double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
-                   -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
-                   gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
-    double d, s;
-    vs_light_eval(&F->light, n, &d, &s);
-    for (int i = 0; i < 3; i++) out[i] = (float)(rgb[i] * d + s) * a;
-    out[3] = a;
-}
-
 static void bin_task(void *arg, int worker, int c)
 {
     bin_job *J = arg;
     vs_frame *F = J->F;
-    size_t n = F->rel->count;
-    size_t v0 = n * (size_t)c / J->nchunks, v1 = n * (size_t)(c + 1) / J->nchunks;
+    size_t n = F->rel->nbricks;
+    size_t b0 = n * (size_t)c / J->nchunks, b1 = n * (size_t)(c + 1) / J->nchunks;
     uint32_t *cnt = J->counts + (size_t)c * F->ntiles;
     const vs_camera *cam = &F->cam;
-    for (size_t v = v0; v < v1; v++) {
+    for (size_t b = b0; b < b1; b++) {
+        struct vs_brick_view *bv = &F->bview[b];
         if (!J->fill) {
-            const vs_voxel *vx = &F->rel->voxels[v];
-            double idx[3] = {vx->i, vx->j, vx->k}, p[3];
-            vs_camera_index_to_view(cam, idx, p);
-            F->vx[v] = (float)p[0];
-            F->vy[v] = (float)p[1];
-            F->vz[v] = (float)p[2];
-            if (F->payload) {
-                float *o = F->payload + 4 * v;
-                if (F->pipeline == VS_PIPELINE_PRE) {
-                    preshade(F, v, o);
-                } else { /* post-alpha: pre-shaded colour, raw density */
-                    preshade(F, v, o);
-                    o[3] = vx->value;
+            /* the view-space box of the brick's corner voxel centres */
+            const vs_brick *br = &F->rel->bricks[b];
+            double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+            for (int corner = 0; corner < 8; corner++) {
+                double idx[3] = {corner & 1 ? br->i1 : br->i0, corner & 2 ? br->j1 : br->j0,
+                                 corner & 4 ? br->k1 : br->k0},
+                       p[3];
+                vs_camera_index_to_view(cam, idx, p);
+                for (int a = 0; a < 3; a++) {
+                    if (p[a] < lo[a]) lo[a] = p[a];
+                    if (p[a] > hi[a]) hi[a] = p[a];
                 }
             }
+            /* widen by float rounding so that every voxel centre, computed
+             * in the tile, lies inside */
+            bv->x0 = (float)lo[0] - 1e-3f;
+            bv->x1 = (float)hi[0] + 1e-3f;
+            bv->y0 = (float)lo[1] - 1e-3f;
+            bv->y1 = (float)hi[1] + 1e-3f;
+            bv->z0 = (float)lo[2] - 1e-3f;
+            bv->z1 = (float)hi[2] + 1e-3f;
         }
         int tx0, tx1, ty0, ty1;
-        if (!tile_range(F, F->vx[v], F->vy[v], &tx0, &tx1, &ty0, &ty1)) continue;
+        if (!tile_range(F, bv->x0, bv->x1, bv->y0, bv->y1, &tx0, &tx1, &ty0, &ty1)) continue;
         for (int ty = ty0; ty <= ty1; ty++)
             for (int tx = tx0; tx <= tx1; tx++) {
                 int t = ty * F->tiles_x + tx;
                 if (J->fill)
-                    F->tile_entries[cnt[t]++] = (uint32_t)v;
+                    F->tile_entries[cnt[t]++] = (uint32_t)b;
                 else
                     cnt[t]++;
             }
@@ -138,10 +127,7 @@ static void free_frame(vs_frame *F)
     vs_footprint_free(&F->fp);
     vs_shade_lut_free(&F->lut);
     free(F->cls);
-    free(F->vx);
-    free(F->vy);
-    free(F->vz);
-    free(F->payload);
+    free(F->bview);
     free(F->tile_start);
     free(F->tile_entries);
     free(F->wstats);
@@ -196,24 +182,21 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     F.ntiles = F.tiles_x * F.tiles_y;
     F.pad_x = F.fp.rx + 1.0; /* + the one-pixel seam for central differences */
     F.pad_y = F.fp.ry + 1.0;
-    F.vx = malloc((nv ? nv : 1) * sizeof(float));
-    F.vy = malloc((nv ? nv : 1) * sizeof(float));
-    F.vz = malloc((nv ? nv : 1) * sizeof(float));
-    if (s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA)
-        F.payload = malloc((nv ? nv : 1) * 4 * sizeof(float));
+    size_t nb = F.rel->nbricks;
+    F.bview = malloc((nb ? nb : 1) * sizeof *F.bview);
     F.tile_start = calloc((size_t)F.ntiles + 1, sizeof(uint32_t));
     F.wstats = calloc((size_t)nthreads, sizeof *F.wstats);
     image = malloc((size_t)W * H * 4 * sizeof(float));
     J.F = &F;
-    J.nchunks = nv < 4096 ? 1 : nthreads * 4;
+    J.nchunks = nb < 256 ? 1 : nthreads * 4;
     J.counts = calloc((size_t)J.nchunks * F.ntiles, sizeof(uint32_t));
-    if (!F.vx || !F.vy || !F.vz || (with_grad && !F.payload) || !F.tile_start || !F.wstats || !image ||
+    if (!F.bview || !F.tile_start || !F.wstats || !image ||
         !J.counts) {
         rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory for a %dx%d frame of %zu voxels", W, H, nv);
         goto fail;
     }
-    /* transform + count, prefix sums (tile-major, chunk-minor keeps voxel
-     * order inside each tile for any thread count), fill */
+    /* project bricks + count, prefix sums (tile-major, chunk-minor keeps
+     * brick order inside each tile for any thread count), fill */
     J.fill = 0;
     vs_pool_run(ctx->pool, J.nchunks, bin_task, &J);
     uint64_t total = 0;

@@ -28,15 +28,14 @@ typedef struct vs_frame {
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
 
-    /* per relevant voxel, view-space position (x, y pixels; z view units) */
-    float *vx, *vy, *vz;
-    /* pre / post-alpha: per voxel splat payload (4 floats) */
-    float *payload;
+    /* per brick of relevant voxels: view-space bounds of its voxel centres
+     * (x, y pixels; z view units), for binning and brick-level culling */
+    struct vs_brick_view { float x0, x1, y0, y1, z0, z1; } *bview;
 
     /* tiles */
     int tile, tiles_x, tiles_y, ntiles;
     uint32_t *tile_start;            /* ntiles + 1                               */
-    uint32_t *tile_entries;          /* voxel indices, per tile in voxel order   */
+    uint32_t *tile_entries;          /* brick indices, per tile in brick order   */
     double pad_x, pad_y;             /* footprint half-extent + seam, pixels     */
 
     float *image;                    /* width*height*4 straight RGBA output      */

@@ -352,12 +352,82 @@ static void build_sat(const tile_ctx *t, const float *acc, float thr, int *sat)
     }
 }
 
-static int footprint_occluded(const tile_ctx *t, const int *sat, float x, float y)
+static void clear_rect(float *buf, int bw, int ch, const rect *r)
+{
+    if (rect_empty(r)) return;
+    for (int y = r->y0; y < r->y1; y++)
+        memset(buf + ((size_t)y * bw + r->x0) * ch, 0, (size_t)(r->x1 - r->x0) * ch * sizeof(float));
+}
+
+/* A voxel of an expanded brick, from its first sheet to its last. */
+typedef struct pend {
+    float x, y, z; /* view-space centre                            */
+    uint32_t v;    /* index in the relevant-voxel list              */
+    int kl;        /* last sheet (lowered when the voxel is culled) */
+    int next;      /* next entry with the same first sheet          */
+    float w[4];    /* splat weights before the slab's depth integral */
+} pend;
+
+/* Per tile: the voxels of expanded bricks in buckets by first sheet.  A
+ * sheet receives its voxels in (first sheet, brick, voxel) order whatever
+ * the tiling or thread count, so the sums are bit-identical. */
+typedef struct tile_state {
+    const tile_ctx *t;
+    pend *p;
+    int np, cap;
+    int *head, *tail; /* bucket of sheet k at k - kmin; -1 when empty */
+    int kmin, kmax;
+    int *active;      /* sheet-at-a-time path: voxels overlapping the sheet */
+    int nactive, cap_active;
+    const float *acc; /* the tile's accumulation (occlusion map = alpha)   */
+    const int *sat;   /* summed-area table of opaque pixels                */
+    const int *opaque;
+    vs_worker_stats *ws;
+    int failed;
+} tile_state;
+
+static inline float lookup_corr(const vs_frame *F, const float *table, float v);
+static inline void lookup_color(const vs_frame *F, float v, float rgb[3]);
+
+/* Splat weights of voxel v: density (post), or classified colour times the
+ * Phong terms of its grid gradient (pre-shading: once per voxel and view). */
+static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
+{
+    const float bscale = (float)(F->fp.b / F->fp.slab);
+    float val = F->rel->voxels[v].value;
+    if (F->pipeline == VS_PIPELINE_POST_CD || F->pipeline == VS_PIPELINE_POST_GS) {
+        w[0] = val * bscale;
+        w[1] = w[2] = w[3] = 0.0f;
+        return;
+    }
+    float rgb[3], a = vs_classify_alpha(F->cls, val);
+    lookup_color(F, val, rgb);
+    const float *g = F->rel->grad + 3 * (size_t)v;
+    const vs_camera *cam = &F->cam;
+    double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
+    double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
+                   -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
+                   gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
+    float d, sp;
+    if (F->s->exact_normals) {
+        double dd, ss;
+        vs_light_eval(&F->light, n, &dd, &ss);
+        d = (float)dd;
+        sp = (float)ss;
+    } else {
+        vs_shade_lut_eval(&F->lut, (float)n[0], (float)n[1], (float)n[2], &d, &sp);
+    }
+    for (int i = 0; i < 3; i++) w[i] = (rgb[i] * d + sp) * a * bscale;
+    w[3] = (F->pipeline == VS_PIPELINE_PRE ? a : val) * bscale;
+}
+
+/* Is every tile pixel that a footprint centred in [x0,x1] x [y0,y1] (plus
+ * the central-difference seam) can reach already opaque? */
+static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1)
 {
     const vs_frame *F = t->F;
-    /* footprint extent in own-pixel coordinates, one pixel wider */
-    int xa = (int)floorf(x - (float)F->pad_x) - t->x0, xb = (int)ceilf(x + (float)F->pad_x) - t->x0;
-    int ya = (int)floorf(y - (float)F->pad_y) - t->y0, yb = (int)ceilf(y + (float)F->pad_y) - t->y0;
+    int xa = (int)floorf(x0 - (float)F->pad_x) - t->x0, xb = (int)ceilf(x1 + (float)F->pad_x) - t->x0;
+    int ya = (int)floorf(y0 - (float)F->pad_y) - t->y0, yb = (int)ceilf(y1 + (float)F->pad_y) - t->y0;
     if (xa < 0) xa = 0;
     if (ya < 0) ya = 0;
     if (xb > t->tw - 1) xb = t->tw - 1;
@@ -368,119 +438,138 @@ static int footprint_occluded(const tile_ctx *t, const int *sat, float x, float 
     return sum == (xb - xa + 1) * (yb - ya + 1);
 }
 
-static void clear_rect(float *buf, int bw, int ch, const rect *r)
+/* Open brick b: cull it whole if its footprints can only land on opaque
+ * pixels, else project its voxels and bucket those that reach this tile. */
+static void expand_brick(tile_state *ts, uint32_t b, int opening)
 {
-    if (rect_empty(r)) return;
-    for (int y = r->y0; y < r->y1; y++)
-        memset(buf + ((size_t)y * bw + r->x0) * ch, 0, (size_t)(r->x1 - r->x0) * ch * sizeof(float));
+    const tile_ctx *t = ts->t;
+    const vs_frame *F = t->F;
+    const struct vs_brick_view *bv = &F->bview[b];
+    const vs_brick *br = &F->rel->bricks[b];
+    if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, bv->x0, bv->x1, bv->y0, bv->y1)) {
+        ts->ws->culled += br->count;
+        return;
+    }
+    const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
+    const float px = (float)F->pad_x, py = (float)F->pad_y;
+    const float bx0 = (float)t->ox, bx1 = (float)(t->ox + t->bw - 1);
+    const float by0 = (float)t->oy, by1 = (float)(t->oy + t->bh - 1);
+    for (uint32_t v = br->start; v < br->start + br->count; v++) {
+        const vs_voxel *vx = &F->rel->voxels[v];
+        double idx[3] = {vx->i, vx->j, vx->k}, pv[3];
+        vs_camera_index_to_view(&F->cam, idx, pv);
+        float x = (float)pv[0], y = (float)pv[1], z = (float)pv[2];
+        if (x + px < bx0 || x - px > bx1 || y + py < by0 || y - py > by1) continue; /* not this tile */
+        int kf = (int)floorf((z - rz) / slab), kl = (int)floorf((z + rz) / slab);
+        if (kf < opening) kf = opening; /* rounding guard: the brick bound is conservative */
+        if (kl > ts->kmax) kl = ts->kmax;
+        if (kl < kf) continue;
+        if (ts->np == ts->cap) {
+            int cap = ts->cap ? 2 * ts->cap : 1024;
+            pend *np = realloc(ts->p, (size_t)cap * sizeof *np);
+            if (!np) {
+                ts->failed = 1;
+                return;
+            }
+            ts->p = np;
+            ts->cap = cap;
+        }
+        pend *e = &ts->p[ts->np];
+        e->x = x;
+        e->y = y;
+        e->z = z;
+        e->v = v;
+        e->kl = kl;
+        e->next = -1;
+        voxel_weights(F, v, e->w);
+        int slot = kf - ts->kmin;
+        if (ts->tail[slot] >= 0)
+            ts->p[ts->tail[slot]].next = ts->np;
+        else
+            ts->head[slot] = ts->np;
+        ts->tail[slot] = ts->np;
+        ts->np++;
+    }
 }
 
-/* The voxels of a tile whose kernels overlap the current sheet, in
- * (first sheet, voxel) order so every tiling sums in the same order. */
-typedef struct active_list {
-    const uint32_t *ent; /* the tile's voxel indices                       */
-    int n;
-    const int *kf;       /* first sheet of each entry                        */
-    int *kl;             /* last sheet (lowered when the voxel is culled)    */
-    const int *order;    /* entries sorted by first sheet                    */
-    int *active;
-    int nactive, next_new;
-    const float *acc;    /* the tile's accumulation (occlusion map = alpha)  */
-    const int *sat;      /* summed-area table of opaque pixels               */
-    const int *opaque;   /* number of opaque pixels                          */
-    vs_worker_stats *ws;
-} active_list;
-
-/* Rasterize sheet k into `dst`: retire voxels that ended, admit those that
- * start here, cull occluded ones, splat the rest. */
-static void rasterize_sheet(const tile_ctx *t, active_list *al, int k, float *dst, rect *bb)
+/* Sheet at a time (general footprints): rasterize sheet k into `dst` from
+ * the voxels overlapping it; retire those that ended, admit those that start
+ * here, cull occluded ones. */
+static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
 {
+    const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
-    const vs_settings *s = F->s;
-    double t0 = vs_now_ms();
     int keep = 0;
-    for (int a = 0; a < al->nactive; a++)
-        if (al->kl[al->active[a]] >= k) al->active[keep++] = al->active[a];
-    al->nactive = keep;
-    while (al->next_new < al->n && al->kf[al->order[al->next_new]] == k)
-        al->active[al->nactive++] = al->order[al->next_new++];
-    const float bscale = (float)(F->fp.b / F->fp.slab);
-    for (int a = 0; a < al->nactive; a++) {
-        int e = al->active[a];
-        uint32_t v = al->ent[e];
-        float x = F->vx[v], y = F->vy[v];
-        if (s->occlusion && *al->opaque > 0 && footprint_occluded(t, al->sat, x, y)) {
-            al->ws->culled += (uint64_t)(al->kl[e] - k + 1);
-            al->kl[e] = k - 1; /* dropped at the next update */
+    for (int a = 0; a < ts->nactive; a++)
+        if (ts->p[ts->active[a]].kl >= k) ts->active[keep++] = ts->active[a];
+    ts->nactive = keep;
+    for (int e = ts->head[k - ts->kmin]; e >= 0; e = ts->p[e].next) {
+        if (ts->nactive == ts->cap_active) {
+            int cap = ts->cap_active ? 2 * ts->cap_active : 1024;
+            int *na = realloc(ts->active, (size_t)cap * sizeof *na);
+            if (!na) {
+                ts->failed = 1;
+                return;
+            }
+            ts->active = na;
+            ts->cap_active = cap;
+        }
+        ts->active[ts->nactive++] = e;
+    }
+    for (int a = 0; a < ts->nactive; a++) {
+        pend *e = &ts->p[ts->active[a]];
+        if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y)) {
+            ts->ws->culled++;
+            e->kl = k - 1; /* dropped at the next update */
             continue;
         }
         section sec;
-        if (!make_section(t, x, y, F->vz[v], k, &sec)) continue;
-        al->ws->splatted++;
-        float val = F->rel->voxels[v].value;
+        if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
+        ts->ws->splatted++;
         switch (F->pipeline) {
-        case VS_PIPELINE_POST_CD: raster1(t, &sec, val * bscale, dst, bb); break;
-        case VS_PIPELINE_POST_GS: raster_gs(t, &sec, val * bscale, dst, bb); break;
-        default: {
-            const float *pl = F->payload + 4 * (size_t)v;
-            float w4[4] = {pl[0] * bscale, pl[1] * bscale, pl[2] * bscale, pl[3] * bscale};
-            raster4(t, &sec, w4, dst, bb);
-        }
+        case VS_PIPELINE_POST_CD: raster1(t, &sec, e->w[0], dst, bb); break;
+        case VS_PIPELINE_POST_GS: raster_gs(t, &sec, e->w[0], dst, bb); break;
+        default: raster4(t, &sec, e->w, dst, bb);
         }
     }
-    al->ws->ms_rasterize += vs_now_ms() - t0;
 }
 
-/* Separable footprints, voxel at a time: when sheet `a` opens, each voxel
- * starting there is tested once against the occlusion map and then splatted
- * into every sheet its kernel reaches (a..kl), reusing its row weights.  The
- * sheets live in a ring of R buffers (sheet k in slot (k - kbase) mod R).
- * Every sheet still receives its voxels in (first sheet, voxel) order, so
- * the sums are those of the sheet-at-a-time loop, bit for bit. */
-static void activate_sheet(const tile_ctx *t, active_list *al, int a, float *const *ring, rect *bbs, int R,
-                           int kbase)
+/* Voxel at a time (separable footprints): each voxel starting at sheet
+ * `opening` is tested once against the occlusion map and splatted into every
+ * sheet its kernel reaches, reusing its row weights; sheet k lives in ring
+ * slot (k - kbase) mod R. */
+static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase)
 {
+    const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
-    const vs_settings *s = F->s;
-    double t0 = vs_now_ms();
-    const float bscale = (float)(F->fp.b / F->fp.slab);
-    while (al->next_new < al->n && al->kf[al->order[al->next_new]] == a) {
-        int e = al->order[al->next_new++];
-        uint32_t v = al->ent[e];
-        float x = F->vx[v], y = F->vy[v], z = F->vz[v];
-        if (s->occlusion && *al->opaque > 0 && footprint_occluded(t, al->sat, x, y)) {
-            al->ws->culled += (uint64_t)(al->kl[e] - a + 1);
+    for (int i = ts->head[opening - ts->kmin]; i >= 0; i = ts->p[i].next) {
+        const pend *e = &ts->p[i];
+        if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y)) {
+            ts->ws->culled++;
             continue;
         }
         section sec;
-        sec.cx = x;
-        sec.cy = y;
+        sec.cx = e->x;
+        sec.cy = e->y;
         foot_rows fr;
         prepare_rows(t, &sec, F->pipeline == VS_PIPELINE_POST_GS, &fr);
         if (fr.ya > fr.yb) continue;
-        float val = F->rel->voxels[v].value;
-        float w4[4] = {0, 0, 0, 0};
-        if (F->payload) {
-            const float *pl = F->payload + 4 * (size_t)v;
-            for (int c = 0; c < 4; c++) w4[c] = pl[c] * bscale;
-        }
-        for (int k = a; k <= al->kl[e]; k++) {
-            if (!make_section(t, x, y, z, k, &sec)) continue;
-            al->ws->splatted++;
+        for (int k = opening; k <= e->kl; k++) {
+            if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
+            ts->ws->splatted++;
             int slot = (k - kbase) % R;
             switch (F->pipeline) {
-            case VS_PIPELINE_POST_CD: splat_rows1(t, &fr, val * bscale * sec.D, ring[slot], &bbs[slot]); break;
+            case VS_PIPELINE_POST_CD: splat_rows1(t, &fr, e->w[0] * sec.D, ring[slot], &bbs[slot]); break;
             case VS_PIPELINE_POST_GS:
-                splat_rows_gs(t, &fr, val * bscale * sec.D, val * bscale * sec.E, ring[slot], &bbs[slot]);
+                splat_rows_gs(t, &fr, e->w[0] * sec.D, e->w[0] * sec.E, ring[slot], &bbs[slot]);
                 break;
             default: {
-                float wk[4] = {w4[0] * sec.D, w4[1] * sec.D, w4[2] * sec.D, w4[3] * sec.D};
+                float wk[4] = {e->w[0] * sec.D, e->w[1] * sec.D, e->w[2] * sec.D, e->w[3] * sec.D};
                 splat_rows4(t, &fr, wk, ring[slot], &bbs[slot]);
             }
             }
         }
     }
-    al->ws->ms_rasterize += vs_now_ms() - t0;
 }
 
 static inline float lookup_corr(const vs_frame *F, const float *table, float v)
@@ -498,7 +587,8 @@ static inline void lookup_color(const vs_frame *F, float v, float rgb[3])
 {
     const vs_classify *c = F->cls;
     float x = (float)((v - c->vmin) * c->scale);
-    if (!(x > 0.0f)) x = 0.0f;
+    if (!(x > 0.0f)) x = 0.0f; /* also NaN */
+    if (x >= (float)(VS_TF_TABLE - 1)) x = (float)(VS_TF_TABLE - 1); /* also +inf: no int overflow */
     int i = (int)x;
     if (i >= VS_TF_TABLE - 1) {
         rgb[0] = c->color[VS_TF_TABLE - 1][0];
@@ -579,57 +669,66 @@ void vs_tile_render(void *arg, int worker, int task)
     t.rdy = t.rey ? t.rey + t.bh : NULL;
     const int npix = t.tw * t.th;
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
-    const int n = (int)(F->tile_start[task + 1] - F->tile_start[task]);
+    const int nbr = (int)(F->tile_start[task + 1] - F->tile_start[task]);
     const vs_pipeline pl = F->pipeline;
     const int ch = pl == VS_PIPELINE_POST_CD ? 1 : 4;
     const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
     const float thr = (float)s->occlusion_threshold;
 
     float *acc = calloc((size_t)npix * 4, sizeof(float));
-    int *kf = malloc((size_t)(n ? n : 1) * sizeof(int));
-    int *kl = malloc((size_t)(n ? n : 1) * sizeof(int));
-    int *order = malloc((size_t)(n ? n : 1) * sizeof(int));
-    int *active = malloc((size_t)(n ? n : 1) * sizeof(int));
-    float *sheets = NULL;
-    float **ring = NULL;
-    rect *bbox = NULL;
+    int *kfb = malloc((size_t)(nbr ? nbr : 1) * sizeof(int));
+    int *order = malloc((size_t)(nbr ? nbr : 1) * sizeof(int));
     shade_buf sb = {malloc((size_t)npix * sizeof(float)), malloc((size_t)npix * 3 * sizeof(float))};
     int *bucket = NULL;
     int *sat = calloc((size_t)(t.tw + 1) * (t.th + 1), sizeof(int));
-    if (!t.ex || !t.rxa || !t.rey || !sat || !acc || !kf || !kl || !order || !active || !sb.alpha || !sb.g) {
+    float *sheets = NULL;
+    float **ring = NULL;
+    rect *bbox = NULL;
+    int opaque = 0, opaque_in_sat = 0;
+    tile_state ts;
+    memset(&ts, 0, sizeof ts);
+    ts.t = &t;
+    ts.acc = acc;
+    ts.sat = sat;
+    ts.opaque = &opaque;
+    ts.ws = ws;
+    if (!t.ex || !t.rxa || !t.rey || !sat || !acc || !kfb || !order || !sb.alpha || !sb.g) {
         atomic_store(&F->error, 1);
         goto done;
     }
 
-    /* first and last sheet of each voxel, and a counting sort by the first */
+    /* the sheets each brick spans, and a counting sort by its first */
     int kmin = 1 << 30, kmax = -(1 << 30);
-    for (int e = 0; e < n; e++) {
-        float z = F->vz[ent[e]];
-        kf[e] = (int)floorf((z - rz) / slab);
-        kl[e] = (int)floorf((z + rz) / slab);
-        if (kf[e] < kmin) kmin = kf[e];
-        if (kl[e] > kmax) kmax = kl[e];
+    for (int e = 0; e < nbr; e++) {
+        const struct vs_brick_view *bv = &F->bview[ent[e]];
+        kfb[e] = (int)floorf((bv->z0 - rz) / slab);
+        int kl = (int)floorf((bv->z1 + rz) / slab);
+        if (kfb[e] < kmin) kmin = kfb[e];
+        if (kl > kmax) kmax = kl;
     }
-    if (n > 0) {
+    if (nbr > 0) {
         int span = kmax - kmin + 1;
         bucket = calloc((size_t)span + 1, sizeof(int));
-        if (!bucket) {
+        ts.head = malloc((size_t)span * sizeof(int));
+        ts.tail = malloc((size_t)span * sizeof(int));
+        if (!bucket || !ts.head || !ts.tail) {
             atomic_store(&F->error, 1);
             goto done;
         }
-        for (int e = 0; e < n; e++) bucket[kf[e] - kmin + 1]++;
+        for (int b = 0; b < span; b++) ts.head[b] = ts.tail[b] = -1;
+        for (int e = 0; e < nbr; e++) bucket[kfb[e] - kmin + 1]++;
         for (int b = 0; b < span; b++) bucket[b + 1] += bucket[b];
-        for (int e = 0; e < n; e++) order[bucket[kf[e] - kmin]++] = e; /* stable */
+        for (int e = 0; e < nbr; e++) order[bucket[kfb[e] - kmin]++] = e; /* stable */
+        ts.kmin = kmin;
+        ts.kmax = kmax;
     }
 
     /* Sheet buffers: voxel-at-a-time for separable footprints (a ring that
      * holds every sheet a kernel reaches, plus the neighbours central
      * differences read), else sheet-at-a-time with three buffers. */
-    int span = 1;
-    for (int e = 0; e < n; e++)
-        if (kl[e] - kf[e] + 1 > span) span = kl[e] - kf[e] + 1;
-    const int multi = F->fp.separable && span <= 64;
-    const int R = multi ? span + 2 : 3;
+    const int vspan = (int)ceilf(2.0f * rz / slab) + 1; /* sheets one kernel can reach */
+    const int multi = F->fp.separable && vspan <= 64;
+    const int R = multi ? vspan + 2 : 3;
     sheets = calloc((size_t)R * ch * t.bw * t.bh, sizeof(float));
     ring = malloc((size_t)R * sizeof *ring);
     bbox = malloc((size_t)R * sizeof *bbox);
@@ -642,28 +741,30 @@ void vs_tile_render(void *arg, int worker, int task)
         rect_clear(&bbox[i]);
     }
     const int kbase = kmin - 1; /* slot of sheet k: (k - kbase) % R, never negative */
-    int opaque = 0, opaque_in_sat = 0;
-    active_list al = {ent, n, kf, kl, order, active, 0, 0, acc, sat, &opaque, ws};
     const rect own = {1, 1, t.tw + 1, t.th + 1};
+    int next_brick = 0;
 
     /* post-cd shades sheet k once k + 1 is complete */
     const int ahead = pl == VS_PIPELINE_POST_CD ? 1 : 0;
-    for (int k = kmin - ahead; n > 0 && k < kmin; k++) {
-        if (multi)
-            activate_sheet(&t, &al, k + ahead, ring, bbox, R, kbase);
-        else
-            rasterize_sheet(&t, &al, k + ahead, ring[(k + ahead - kbase) % R], &bbox[(k + ahead - kbase) % R]);
-    }
-    for (int k = kmin; n > 0 && k <= kmax; k++) {
+    for (int k = kmin - ahead; nbr > 0 && k <= kmax; k++) {
         if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) break;
-        const int cur = (k - kbase) % R, prev = (k - 1 - kbase) % R, nxt = (k + 1 - kbase) % R;
+        const int cur = (k - kbase) % R, prev = (k - 1 - kbase + R) % R, nxt = (k + 1 - kbase) % R;
         const int opening = k + ahead;
         if (opening <= kmax) {
+            double t0 = vs_now_ms();
+            while (next_brick < nbr && kfb[order[next_brick]] == opening)
+                expand_brick(&ts, ent[order[next_brick++]], opening);
             if (multi)
-                activate_sheet(&t, &al, opening, ring, bbox, R, kbase);
+                activate_sheet(&ts, opening, ring, bbox, R, kbase);
             else
-                rasterize_sheet(&t, &al, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R]);
+                rasterize_sheet(&ts, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R]);
+            ws->ms_rasterize += vs_now_ms() - t0;
+            if (ts.failed) {
+                atomic_store(&F->error, 1);
+                break;
+            }
         }
+        if (k < kmin) continue;
         float *const *buf = ring;
         ws->tiles_total++;
         ws->sheets++;
@@ -781,10 +882,12 @@ done:
             }
     }
     free(acc);
-    free(kf);
-    free(kl);
+    free(kfb);
     free(order);
-    free(active);
+    free(ts.p);
+    free(ts.head);
+    free(ts.tail);
+    free(ts.active);
     free(sheets);
     free(ring);
     free(bbox);
