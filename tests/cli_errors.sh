@@ -98,7 +98,7 @@ expect_fail 1 "--slab 0" render "${SCENE[@]}" --slab 0 -o a.png
 expect_fail 1 "--bits 12" render "${SCENE[@]}" --bits 12 -o a.png
 expect_fail 1 "--no-pin=1" render "${SCENE[@]}" --no-pin=1 -o a.png
 expect_fail 1 "--tf" render "${SCENE[@]}" --tf tf.txt -o a.png
-expect_msg "--tf: transfer-function files are not supported yet" "--tf message"
+expect_msg "tf.txt: cannot open" "--tf on a missing file names it"
 VSPLAT_THREADS=lots expect_fail 1 "bad VSPLAT_THREADS" render "${SCENE[@]}" -o a.png
 expect_msg "VSPLAT_THREADS" "bad VSPLAT_THREADS names the variable"
 VSPLAT_ISA=mmx expect_fail 1 "bad VSPLAT_ISA" render "${SCENE[@]}" -o a.png
