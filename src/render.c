@@ -185,7 +185,8 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     size_t nb = F.rel->nbricks;
     F.bview = malloc((nb ? nb : 1) * sizeof *F.bview);
     F.tile_start = calloc((size_t)F.ntiles + 1, sizeof(uint32_t));
-    F.wstats = calloc((size_t)nthreads, sizeof *F.wstats);
+    F.wstats = aligned_alloc(_Alignof(vs_worker_stats), (size_t)nthreads * sizeof *F.wstats);
+    if (F.wstats) memset(F.wstats, 0, (size_t)nthreads * sizeof *F.wstats);
     image = malloc((size_t)W * H * 4 * sizeof(float));
     J.F = &F;
     J.nchunks = nb < 256 ? 1 : nthreads * 4;

@@ -9,10 +9,11 @@
 
 #include <stdatomic.h>
 
+/* Per-worker counters, summed after the join (no atomics in the hot loop);
+ * each on its own cache lines so workers never share one. */
 typedef struct vs_worker_stats {
-    uint64_t splatted, culled, sheets, tiles_total, tiles_shaded;
+    _Alignas(64) uint64_t splatted, culled, sheets, tiles_total, tiles_shaded;
     double ms_rasterize, ms_gradient, ms_shade, ms_composite;
-    double pad[4]; /* keep workers' counters on separate cache lines */
 } vs_worker_stats;
 
 typedef struct vs_frame {
