@@ -13,6 +13,10 @@ if [[ ! -f $BUILD/CMakeCache.txt ]]; then
     echo "SKIP: $BUILD is not a CMake build folder"
     exit 0
 fi
+if grep -Eq '^VSPLAT_SANITIZE:[A-Z]+=.+' "$BUILD/CMakeCache.txt"; then
+    echo "SKIP: sanitizer build (an installed sanitized library needs sanitized consumers)"
+    exit 0
+fi
 for tool in cmake gcc pkg-config; do
     if ! command -v $tool >/dev/null; then
         echo "SKIP: $tool not found"
