@@ -6,6 +6,8 @@
 
 #include "internal.h"
 
+#include <float.h>
+
 typedef struct vs_shade_lut {
     int nl, np;              /* longitude bins (lambda), latitude bins (phi) */
     uint16_t *lambda_bin;    /* [255*255]: (gy+127, gx+127) -> lambda bin     */
@@ -25,6 +27,12 @@ static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy
     float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
     float m = ax > ay ? ax : ay;
     if (az > m) m = az;
+    /* As in vs_light_eval: a NaN or infinite component (densities that
+     * overflowed float) has no direction, and a gradient under 1e-30 counts
+     * as zero (127/m would overflow to inf below 3.7e-37); both face the
+     * eye.  Without this, lrintf gets NaN or inf, whose result is
+     * unspecified and would index outside the tables. */
+    if (!(ax <= FLT_MAX && ay <= FLT_MAX && az <= FLT_MAX) || !(m >= 1e-30f)) m = 0.0f;
     int ix = 0, iy = 0, iz = 0;
     if (m > 0.0f) { /* quantise to signed bytes by the largest component */
         float k = 127.0f / m;
