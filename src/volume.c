@@ -85,10 +85,12 @@ void vs_volume_release(vs_volume *v)
 void *vs_volume_data(vs_volume *v) { return v ? v->data : NULL; }
 void vs_volume_dims(const vs_volume *v, int dims[3])
 {
+    if (!dims) return;
     for (int a = 0; a < 3; a++) dims[a] = v ? v->dims[a] : 0;
 }
 void vs_volume_spacing(const vs_volume *v, double spacing[3])
 {
+    if (!spacing) return;
     for (int a = 0; a < 3; a++) spacing[a] = v ? v->spacing[a] : 0.0;
 }
 vs_type vs_volume_type(const vs_volume *v) { return v ? v->type : VS_U8; }
