@@ -58,6 +58,8 @@ vs_status vs_classify_setup(vs_context *ctx, const struct vs_volume *vol, const 
 {
     memset(c, 0, sizeof *c);
     double range = vol->vmax - vol->vmin;
+    if (s->tf_count < 0)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "transfer function: %d points", s->tf_count);
     if (s->tf_count > 0) {
         if (!s->tf) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "transfer function: NULL points");
         for (int i = 0; i < s->tf_count; i++) {
