@@ -91,6 +91,17 @@ static vs_status peek_header(vs_context *ctx, const char *path, const char *hdr,
     if (!supported_real(datatype))
         return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "%s: unsupported NIfTI datatype %s (%d)", path,
                             nifti_datatype_string(datatype), datatype);
+    /* nifticlib silently turns dim[2..dim[0]] <= 0 into 1 and an unusable
+     * vox_offset into some offset: a malformed header must not become a
+     * different volume. */
+    for (int a = 2; a <= dim0; a++) {
+        int da = (int16_t)rd16(h + 40 + 2 * a, big);
+        if (da <= 0)
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: bad NIfTI header: dim[%d] is %d", path, a, da);
+    }
+    float vox_offset = rd_f32(h + 108, big);
+    if (!(vox_offset >= 0.0f && vox_offset <= 1e15f))
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: bad NIfTI header: vox_offset is %g", path, vox_offset);
     for (int a = 0; a < 3; a++) pixdim[a] = rd_f32(h + 76 + 4 * (a + 1), big);
     return VS_OK;
 }
