@@ -101,7 +101,11 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
         const float *p = vol->data;
         for (size_t i = 0; i < n; i++) mask[i] = class_of(c, p[i]);
     }
-    if (seam > 0) {
+    if (in_alpha_range(c, 0.0) && seam > 0) {
+        /* Empty space is visible (opacity at 0 is > 0): a voxel left out
+         * would read as 0 and become opaque, so nothing may be left out. */
+        memset(mask, 1, n);
+    } else if (seam > 0) {
         /* Post-classified pipelines: the iso-range is met between voxels
          * wherever a voxel's 3x3x3 neighbourhood holds a value inside the
          * range or values on both sides of it (a thin ramp can fall between
@@ -246,3 +250,5 @@ vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs
     *rebuilt = 1;
     return VS_OK;
 }
+
+int vs_classify_zero_visible(const vs_classify *c) { return in_alpha_range(c, 0.0); }

@@ -45,5 +45,8 @@ typedef struct vs_relevant_cache {
 vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c,
                           int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
+/* Does the classification give value 0 (empty space) a non-zero opacity?
+ * Then every voxel is relevant and sheets are clipped to the volume. */
+int vs_classify_zero_visible(const vs_classify *c);
 
 #endif

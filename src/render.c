@@ -166,6 +166,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     int seam = s->seam >= 0 ? s->seam : (int)ceil(s->kernel_radius);
     if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
     int with_grad = s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA;
+    F.clip_to_volume = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
     int rebuilt = 0;
     double t_rel = vs_now_ms();
     if ((rc = vs_relevant_get(ctx, vol, F.cls, seam, with_grad, &F.rel, &rebuilt)) != VS_OK) goto fail;

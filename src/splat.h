@@ -28,6 +28,8 @@ typedef struct vs_frame {
     const vs_relevant_cache *rel;
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
+    int clip_to_volume;              /* empty space is visible: pixels whose sheet
+                                        point lies outside the volume stay clear */
 
     /* per brick of relevant voxels: view-space bounds of its voxel centres
      * (x, y pixels; z view units), for binning and brick-level culling */

@@ -633,6 +633,25 @@ static inline void shade_gradient(const vs_frame *F, float gx, float gy, float g
     }
 }
 
+/* With a transfer function that makes value 0 visible, sheet pixels whose
+ * slab centre lies outside the volume (where nothing was splatted, so q = 0)
+ * must stay transparent, as they are for the ray caster. */
+static void clip_outside(const tile_ctx *t, int k, const rect *r, float *alpha)
+{
+    const vs_frame *F = t->F;
+    const vs_camera *cam = &F->cam;
+    const double z = (k + 0.5) * F->fp.slab;
+    const double lim[3] = {F->rel->dims[0] - 0.5, F->rel->dims[1] - 0.5, F->rel->dims[2] - 0.5};
+    for (int y = r->y0; y < r->y1; y++)
+        for (int x = r->x0; x < r->x1; x++) {
+            double v[3] = {x + t->ox, y + t->oy, z}, idx[3];
+            vs_camera_view_to_index(cam, v, idx);
+            int inside = idx[0] >= -0.5 && idx[0] <= lim[0] && idx[1] >= -0.5 && idx[1] <= lim[1] &&
+                         idx[2] >= -0.5 && idx[2] <= lim[2];
+            if (!inside) alpha[(y - 1) * t->tw + (x - 1)] = 0.0f;
+        }
+}
+
 void vs_tile_render(void *arg, int worker, int task)
 {
     vs_frame *F = arg;
@@ -808,6 +827,7 @@ void vs_tile_render(void *arg, int worker, int task)
                     }
                     sb.alpha[o] = a;
                 }
+            if (F->clip_to_volume) clip_outside(&t, k, &r, sb.alpha);
             double t1 = vs_now_ms();
             /* 2. shading: colour per pixel */
             for (int y = r.y0; y < r.y1; y++)
