@@ -300,6 +300,19 @@ static int cmd_render(int argc, char **argv)
         o.s.tf_count = n;
     }
 
+    /* Non-finite voxels (NaN, Inf) are accepted and rendered as 0 (README
+     * "Stiff cases"), but say so. */
+    if (!o.quiet && vs_volume_type(vol) == VS_F32) {
+        int d[3];
+        vs_volume_dims(vol, d);
+        const float *p = vs_volume_data(vol);
+        size_t n = (size_t)d[0] * d[1] * d[2], bad = 0;
+        for (size_t i = 0; i < n; i++) bad += !isfinite(p[i]);
+        if (bad)
+            fprintf(stderr, "vsplat: note: %s: %zu non-finite voxels (NaN or Inf) are rendered as 0\n",
+                    o.scene ? o.scene : o.input, bad);
+    }
+
     /* An iso-range outside the data is allowed (the image is blank), but say so. */
     if (o.s.has_iso && o.s.tf_count == 0 && !o.quiet) {
         double lo, hi;
