@@ -1,0 +1,59 @@
+/* Shared libFuzzer plumbing: write the input to a temporary file with the
+ * suffix the loader dispatches on, call vs_volume_load, release.  Any
+ * status is fine; a crash, a sanitizer report, a leak, a hang (-timeout) or
+ * an allocation over -rss_limit_mb/-malloc_limit_mb is a finding. */
+#ifndef VS_FUZZ_COMMON_H
+#define VS_FUZZ_COMMON_H
+
+#include "vsplat.h"
+
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static vs_context *fz_ctx;
+
+/* A file name per process (libFuzzer -jobs/-workers run processes). */
+static const char *fz_path(const char *suffix)
+{
+    static char path[512];
+    const char *t = getenv("TMPDIR");
+    snprintf(path, sizeof path, "%s/vsplat_fuzz_%ld%s", (t && *t) ? t : "/tmp", (long)getpid(), suffix);
+    return path;
+}
+
+static int fz_write(const char *path, const uint8_t *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f) return 0;
+    int ok = fwrite(data, 1, size, f) == size;
+    ok = (fclose(f) == 0) && ok;
+    return ok;
+}
+
+/* Load `data` as a file ending in `suffix` (opt may be NULL). */
+static void fz_load(const uint8_t *data, size_t size, const char *suffix, const vs_load_options *opt)
+{
+    if (!fz_ctx && vs_context_create(&fz_ctx) != VS_OK) abort();
+    const char *path = fz_path(suffix);
+    if (!fz_write(path, data, size)) abort();
+    vs_volume *v = NULL;
+    vs_status st = vs_volume_load(fz_ctx, path, opt, &v);
+    if (st == VS_OK) {
+        /* what a loaded volume promises: sane dims and a finite range */
+        int d[3];
+        double lo, hi;
+        vs_volume_dims(v, d);
+        vs_volume_range(v, &lo, &hi);
+        if (d[0] < 1 || d[1] < 1 || d[2] < 1 || !(lo <= hi)) abort();
+        vs_volume_release(v);
+    } else {
+        if (v) abort();                         /* out must be cleared */
+        if (!*vs_last_error(fz_ctx)) abort();   /* and a message given */
+    }
+    unlink(path);
+}
+
+#endif

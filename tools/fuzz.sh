@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Fuzz the volume loaders (and the transfer-function parser) with libFuzzer:
+#   tools/fuzz.sh [seconds-per-target] [target...]     (default 20 s, every target)
+# Builds with clang into build-fuzz/ (ASan + UBSan, coverage on the library),
+# seeds each corpus from tests/fuzz/seeds/<target>/, runs each harness for a
+# bounded time (-rss_limit_mb / -malloc_limit_mb 2048: an absurd allocation
+# is a finding too) and prints its execution count.  A crash leaves its input
+# in build-fuzz/crashes/<target>/ and is copied to
+# tests/fuzz/regressions/<target>/, which tests/test_fuzz_regressions.c loads
+# in the normal test suite (commit it with the fix).
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+SECS=${1:-20}
+shift || true
+B=${VSPLAT_FUZZ_BUILD_DIR:-$ROOT/build-fuzz}
+JOBS=${VSPLAT_JOBS:-2}
+if ! [[ $SECS =~ ^[0-9]+$ ]] || [[ $SECS -lt 1 ]]; then
+    echo "fuzz.sh: seconds per target must be a positive integer, got '$SECS'" >&2
+    exit 1
+fi
+"$ROOT/tools/install-deps.sh"
+command -v clang >/dev/null || { echo "fuzz.sh: clang is missing (tools/install-deps.sh installs it)" >&2; exit 1; }
+
+cmake -S "$ROOT" -B "$B" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DVSPLAT_FUZZ=ON \
+    -DVSPLAT_SANITIZE=address,undefined,fuzzer-no-link -DVSPLAT_WERROR=ON >/dev/null
+targets=("$@")
+if [[ ${#targets[@]} -eq 0 ]]; then
+    targets=(nifti nrrd den raw stack tar)
+    [[ -f $ROOT/src/tf_file.c ]] && targets+=(tf)
+fi
+cmake --build "$B" -j"$JOBS" --target "${targets[@]/#/fuzz_}" >/dev/null
+
+export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:allocator_may_return_null=1
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+found=0
+summary=()
+for t in "${targets[@]}"; do
+    corpus="$B/corpus/$t"
+    crashes="$B/crashes/$t"
+    mkdir -p "$corpus" "$crashes"
+    cp -n "$ROOT/tests/fuzz/seeds/$t/"* "$corpus/" 2>/dev/null || true
+    log="$B/fuzz_$t.log"
+    echo "== fuzz_$t: $SECS s" >&2
+    set +e
+    (cd "$B" && "$B/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 \
+        -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$crashes/" >"$log" 2>&1)
+    rc=$?
+    set -e
+    execs=$(grep -m1 'stat::number_of_executed_units' "$log" | awk '{print $2}')
+    cov=$(grep -E '^#[0-9]+.*(DONE|pulse|NEW|REDUCE)' "$log" | tail -1 | grep -oE 'cov: [0-9]+' || true)
+    n_corpus=$(find "$corpus" -type f | wc -l)
+    arts=$(find "$crashes" -type f \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \) | wc -l)
+    line="fuzz_$t: ${execs:-?} executions in $SECS s, ${cov:-cov: ?}, corpus $n_corpus, findings $arts (exit $rc)"
+    summary+=("$line")
+    echo "$line" >&2
+    if [[ $arts -gt 0 || $rc -ne 0 ]]; then
+        found=1
+        mkdir -p "$ROOT/tests/fuzz/regressions/$t"
+        find "$crashes" -type f -exec cp -n {} "$ROOT/tests/fuzz/regressions/$t/" \;
+        grep -m1 -A12 -E 'ERROR|WARNING|runtime error|deadly signal' "$log" >&2 || tail -20 "$log" >&2
+    fi
+done
+printf '%s\n' "${summary[@]}"
+if [[ $found -ne 0 ]]; then
+    echo "fuzz.sh: findings copied to tests/fuzz/regressions/ (logs in $B/fuzz_*.log)" >&2
+    exit 1
+fi
