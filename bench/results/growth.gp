@@ -1,0 +1,18 @@
+if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {
+  set terminal pngcairo size 1000,450 font 'sans,10'
+} else {
+  set terminal png size 1000,450
+}
+set output 'growth.png'
+set multiplot layout 1,2 title 'vsplat growth (post-cd, log-log)'
+set logscale xy
+set grid
+set key top left
+set ylabel 'frame ms'
+set xlabel 'relevant voxels (sphere:N, 256^2)'
+set title 'slope 0.38'
+plot 'growth.dat' index 0 using 1:2 with linespoints pt 7 title 'frame time'
+set xlabel 'pixels (sphere:128)'
+set title 'slope 0.46'
+plot 'growth.dat' index 1 using 1:2 with linespoints pt 7 title 'frame time'
+unset multiplot
