@@ -31,7 +31,8 @@ if [[ ${#targets[@]} -eq 0 ]]; then
 fi
 cmake --build "$B" -j"$JOBS" --target "${targets[@]/#/fuzz_}" >/dev/null
 
-export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:allocator_may_return_null=1
+export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:fast_unwind_on_malloc=0:allocator_may_return_null=1
+export LSAN_OPTIONS=suppressions=$ROOT/tools/sanitize.supp:print_suppressions=0
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 found=0
 summary=()

@@ -28,7 +28,7 @@ for kind in "${kinds[@]}"; do
         cmake -S "$ROOT" -B "$B" -DVSPLAT_SANITIZE=address,undefined -DVSPLAT_WERROR=ON \
             -DCMAKE_C_COMPILER=gcc -DCMAKE_CXX_COMPILER=g++ >/dev/null
         env_vars=(
-            "ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:detect_stack_use_after_return=1:strict_string_checks=1:check_initialization_order=1"
+            "ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:fast_unwind_on_malloc=0:detect_stack_use_after_return=1:strict_string_checks=1:check_initialization_order=1"
             "UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1"
             "LSAN_OPTIONS=suppressions=$SUPP:print_suppressions=0"
         )
