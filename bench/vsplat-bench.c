@@ -26,10 +26,11 @@ static void usage(FILE *f)
             "            prints one line median_ms=... min_ms=... max_ms=... iso_change_ms=... peak_mb=...\n"
             "options (all modes but frame):\n"
             "  --quick         small images, fewer runs and rows (all --quick stays under two minutes)\n"
-            "  --out DIR       results folder for CSV, plot data and PNG plots (default bench/results)\n"
+            "  --out DIR       results folder for CSV, plot data and PNG plots (default bench/results,\n"
+            "                  with --quick bench/results/quick)\n"
             "  --data DIR      folder of the real volumes (default $VSPLAT_DATA, else the source tree's\n"
             "                  ../shared/data); cases whose file is absent are skipped\n"
-            "  --runs N        timed runs per configuration (default 5, scaling 5, error 3; quick 1-2)\n"
+            "  --runs N        timed runs per configuration (default 3, scaling 5; --quick 1, scaling 2)\n"
             "  --threads N     thread count of the N-thread rows (default 0 = one per core)\n"
             "  --no-plot       write the gnuplot scripts but do not run gnuplot\n");
 }
@@ -60,6 +61,7 @@ int main(int argc, char **argv)
     o.out_dir = "bench/results";
     o.plot = 1;
     const char *data = NULL;
+    int out_given = 0;
 
     if (!strcmp(mode, "frame")) {
         /* frame parses the render options itself; --data is not used (INPUT is a path) */
@@ -89,6 +91,7 @@ int main(int argc, char **argv)
                     return 1;
                 }
                 o.out_dir = v;
+                out_given = 1;
             } else if (!strcmp(a, "--data")) {
                 data = v;
             } else if (!strcmp(a, "--runs")) {
@@ -106,6 +109,8 @@ int main(int argc, char **argv)
         }
     }
     o.data_dir = bench_data_dir(data);
+    /* quick results never overwrite the full ones committed in bench/results */
+    if (o.quick && !out_given) o.out_dir = "bench/results/quick";
 
     int (*run[4])(const bench_opts *) = {bench_table1, bench_error, bench_scaling, bench_growth};
     const char *names[4] = {"table1", "error", "scaling", "growth"};
