@@ -68,6 +68,11 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     sec->cy = y;
     if (fp->sheared) { /* centroid of the depth term within the slab */
         float zbar = (e0 - e1) / (2.0f * kap * D);
+        /* a centroid lies inside its slab; in a kernel's tail D and e0 - e1
+         * are both tiny and their tabulated ratio can run away, which would
+         * throw the footprint outside the tiles it was binned to */
+        if (!(zbar >= c0)) zbar = c0;
+        if (zbar > c1) zbar = c1;
         sec->cx += fp->sx * zbar;
         sec->cy += fp->sy * zbar;
     }
