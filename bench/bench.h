@@ -107,6 +107,7 @@ int bench_table1(const bench_opts *o);
 int bench_error(const bench_opts *o);
 int bench_scaling(const bench_opts *o);
 int bench_growth(const bench_opts *o);
+int bench_kernels(const bench_opts *o); /* mode_kernels.c: SIMD kernels per ISA */
 /* frame takes the render options of `vsplat render` (argv after "frame") */
 int bench_frame(const bench_opts *o, int argc, char **argv);
 

@@ -20,7 +20,8 @@ static void usage(FILE *f)
             "  error     error (RMSE, PSNR, SSIM, edge width) against run time, Pareto front marked *\n"
             "  scaling   frame time for 1..N threads (and 2N), pinned and not, speedups\n"
             "  growth    frame time against relevant voxels and against image size, log-log slopes\n"
-            "  all       table1, error, scaling, growth\n"
+            "  kernels   one SIMD kernel at a time per ISA, peak FMA rate, rasterize stage per ISA\n"
+            "  all       table1, error, scaling, growth, kernels\n"
             "  frame INPUT [vsplat render options] [--frames K]\n"
             "            K frames turning the azimuth by 360/K, the iso-change time and peak memory:\n"
             "            prints one line median_ms=... min_ms=... max_ms=... iso_change_ms=... peak_mb=...\n"
@@ -112,11 +113,11 @@ int main(int argc, char **argv)
     /* quick results never overwrite the full ones committed in bench/results */
     if (o.quick && !out_given) o.out_dir = "bench/results/quick";
 
-    int (*run[4])(const bench_opts *) = {bench_table1, bench_error, bench_scaling, bench_growth};
-    const char *names[4] = {"table1", "error", "scaling", "growth"};
+    int (*run[5])(const bench_opts *) = {bench_table1, bench_error, bench_scaling, bench_growth, bench_kernels};
+    const char *names[5] = {"table1", "error", "scaling", "growth", "kernels"};
     int rc = 0, known = 0;
     double t0 = bench_now_ms();
-    for (int m = 0; m < 4; m++) {
+    for (int m = 0; m < 5; m++) {
         if (strcmp(mode, "all") && strcmp(mode, names[m])) continue;
         known = 1;
         if (!strcmp(mode, "all")) printf("\n==== vsplat-bench %s%s ====\n", names[m], o.quick ? " --quick" : "");
@@ -126,7 +127,7 @@ int main(int argc, char **argv)
         if (r > rc) rc = r;
     }
     if (!known) {
-        fprintf(stderr, "vsplat-bench: %s: unknown mode (table1, error, scaling, growth, frame, all)\n", mode);
+        fprintf(stderr, "vsplat-bench: %s: unknown mode (table1, error, scaling, growth, kernels, frame, all)\n", mode);
         return 1;
     }
     if (!strcmp(mode, "all")) printf("\nall: %.1f s\n", (bench_now_ms() - t0) / 1000.0);

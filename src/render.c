@@ -154,6 +154,12 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     }
     if ((rc = vs_classify_setup(ctx, vol, s, F.cls)) != VS_OK) goto fail;
     vs_light_setup(s, &F.cam, &F.light);
+    {
+        /* the settings and VSPLAT_ISA both cap the instruction set */
+        vs_isa cap = s->isa, env = vs_isa_from_env();
+        if (env != VS_ISA_AUTO && (cap == VS_ISA_AUTO || env < cap)) cap = env;
+        vs_kernels_init(&F.kern, cap);
+    }
     if ((rc = vs_footprint_setup(ctx, s, &F.cam, &F.fp)) != VS_OK) goto fail;
     if (!s->exact_normals && (rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, &F.lut)) != VS_OK)
         goto fail;
@@ -246,7 +252,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     if (st) {
         memset(st, 0, sizeof *st);
         st->pipeline = vs_pipeline_name(s->pipeline);
-        st->isa = "scalar";
+        st->isa = vs_isa_name(F.kern.isa);
         st->threads = nthreads;
         st->width = W;
         st->height = H;

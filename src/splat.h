@@ -4,6 +4,7 @@
 #define VS_SPLAT_H
 
 #include "footprint.h"
+#include "kernels.h"
 #include "normals.h"
 #include "relevant.h"
 
@@ -25,6 +26,7 @@ typedef struct vs_frame {
     vs_light light;
     vs_footprint fp;
     vs_shade_lut lut;
+    vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */

@@ -192,7 +192,7 @@ static void splat_rows1(const tile_ctx *t, const foot_rows *fr, float w, float *
         int xa = t->rxa[y], xb = t->rxb[y];
         float wy = w * t->rey[y];
         float *row = q + (size_t)y * t->bw;
-        for (int x = xa; x <= xb; x++) row[x] += wy * ex[x];
+        t->F->kern.splat_row1(row + xa, ex + xa, wy, xb - xa + 1);
     }
     merge_box(bb, &fr->box);
 }
@@ -203,16 +203,9 @@ static void splat_rows4(const tile_ctx *t, const foot_rows *fr, const float w[4]
     for (int y = fr->ya; y <= fr->yb; y++) {
         int xa = t->rxa[y], xb = t->rxb[y];
         float ey = t->rey[y];
-        float w0 = w[0] * ey, w1 = w[1] * ey, w2 = w[2] * ey, w3 = w[3] * ey;
+        const float wy[4] = {w[0] * ey, w[1] * ey, w[2] * ey, w[3] * ey};
         float *row = buf + (size_t)y * t->bw * 4;
-        for (int x = xa; x <= xb; x++) {
-            float h = ex[x];
-            float *p = row + 4 * x;
-            p[0] += w0 * h;
-            p[1] += w1 * h;
-            p[2] += w2 * h;
-            p[3] += w3 * h;
-        }
+        t->F->kern.splat_row4(row + 4 * xa, ex + xa, wy, xb - xa + 1);
     }
     merge_box(bb, &fr->box);
 }
@@ -226,17 +219,9 @@ static void splat_rows_gs(const tile_ctx *t, const foot_rows *fr, float wD, floa
     for (int y = fr->ya; y <= fr->yb; y++) {
         int xa = t->rxa[y], xb = t->rxb[y];
         float ey = t->rey[y];
-        float cq = wD * ey, cx = -2.0f * wD * fp->A * ey, cy = -2.0f * wD * fp->row_k * t->rdy[y] * ey;
-        float cz = wE * ey;
+        const float c[4] = {wD * ey, -2.0f * wD * fp->A * ey, -2.0f * wD * fp->row_k * t->rdy[y] * ey, wE * ey};
         float *row = buf + (size_t)y * t->bw * 4;
-        for (int x = xa; x <= xb; x++) {
-            float h = ex[x];
-            float *p = row + 4 * x;
-            p[0] += cq * h;
-            p[1] += cx * exd[x];
-            p[2] += cy * h;
-            p[3] += cz * h;
-        }
+        t->F->kern.splat_row_gs(row + 4 * xa, ex + xa, exd + xa, c, xb - xa + 1);
     }
     merge_box(bb, &fr->box);
 }
@@ -702,7 +687,8 @@ void vs_tile_render(void *arg, int worker, int task)
     float *acc = calloc((size_t)npix * 4, sizeof(float));
     int *kfb = malloc((size_t)(nbr ? nbr : 1) * sizeof(int));
     int *order = malloc((size_t)(nbr ? nbr : 1) * sizeof(int));
-    shade_buf sb = {malloc((size_t)npix * sizeof(float)), malloc((size_t)npix * 3 * sizeof(float))};
+    /* colours padded by one float: SIMD compositing reads 4 floats a pixel */
+    shade_buf sb = {malloc((size_t)npix * sizeof(float)), calloc((size_t)npix * 3 + 1, sizeof(float))};
     int *bucket = NULL;
     int *sat = calloc((size_t)(t.tw + 1) * (t.th + 1), sizeof(int));
     float *sheets = NULL;
@@ -867,21 +853,10 @@ void vs_tile_render(void *arg, int worker, int task)
             double t2 = vs_now_ms();
             /* 3. front-to-back compositing; the accumulated opacity is the
              * tile's occlusion map */
-            for (int y = r.y0; y < r.y1; y++)
-                for (int x = r.x0; x < r.x1; x++) {
-                    int o = (y - 1) * t.tw + (x - 1);
-                    float a = sb.alpha[o];
-                    if (!(a > 0.0f)) continue;
-                    float *p = acc + 4 * o;
-                    float before = p[3];
-                    float w = (1.0f - before) * a;
-                    p[0] += w * sb.g[3 * o];
-                    p[1] += w * sb.g[3 * o + 1];
-                    p[2] += w * sb.g[3 * o + 2];
-                    p[3] = before + w;
-                    if (p[3] > 1.0f) p[3] = 1.0f;
-                    if (before < thr && p[3] >= thr) opaque++;
-                }
+            for (int y = r.y0; y < r.y1; y++) {
+                int o = (y - 1) * t.tw + (r.x0 - 1);
+                opaque += F->kern.composite(acc + 4 * o, sb.alpha + o, sb.g + 3 * o, r.x1 - r.x0, thr);
+            }
             if (s->occlusion && opaque != opaque_in_sat) {
                 build_sat(&t, acc, thr, sat);
                 opaque_in_sat = opaque;

@@ -1,0 +1,181 @@
+/* vsplat-bench kernels: one function at a time (like zstd's fullbench).
+ * Every SIMD kernel of src/kernels.h against the scalar reference, on each
+ * ISA this CPU has, at footprint-row lengths that occur in practice (a
+ * footprint of radius 2 voxels spans ~9 pixels at 512^2 on a 181^3 head) and
+ * longer ones; then the machine's measured peak FMA rate for scale; then the
+ * rasterize stage of a real frame per ISA (interleaved runs, medians). */
+#include "bench.h"
+#include "kernels.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
+void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
+void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
+
+typedef struct kernel_entry {
+    const char *kernel;
+    vs_isa isa;
+    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite */
+    void *fn;
+} kernel_entry;
+
+/* Time `reps` calls over a buffer of rows; returns ns per element. */
+static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, float *exd, float *alpha, float *rgb,
+                          long reps)
+{
+    const float w4[4] = {0.25f, 0.5f, 0.75f, 1.0f};
+    double best = 1e30;
+    for (int trial = 0; trial < 5; trial++) {
+        double t0 = bench_now_ms();
+        for (long r = 0; r < reps; r++) {
+            int off = (int)(r & 63); /* unaligned, moving starts like real rows */
+            switch (k->kind) {
+            case 0: ((void (*)(float *, const float *, float, int))k->fn)(buf + off, ex + off, 1e-3f, n); break;
+            case 1:
+                ((void (*)(float *, const float *, const float *, int))k->fn)(buf + 4 * off, ex + off, w4, n);
+                break;
+            case 2:
+                ((void (*)(float *, const float *, const float *, const float *, int))k->fn)(buf + 4 * off, ex + off,
+                                                                                         exd + off, w4, n);
+                break;
+            default:
+                if ((r & 1023) == 0) memset(buf, 0, (size_t)(4 * (64 + n)) * sizeof(float));
+                ((int (*)(float *, const float *, const float *, int, float))k->fn)(buf + 4 * off, alpha + off,
+                                                                                  rgb + 3 * off, n, 0.99f);
+            }
+        }
+        double ms = bench_now_ms() - t0;
+        if (ms < best) best = ms;
+    }
+    return best * 1e6 / ((double)reps * n);
+}
+
+/* Peak single-precision FMA rate: 10 independent 8-wide chains. */
+__attribute__((target("avx2,fma"))) static double peak_fma_gflops(void)
+{
+    typedef float v8 __attribute__((vector_size(32)));
+    v8 a[10], m = {1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f},
+              c = {1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f};
+    for (int i = 0; i < 10; i++) a[i] = c * (float)i;
+    const long iters = 20000000;
+    double best = 1e30;
+    for (int trial = 0; trial < 3; trial++) {
+        double t0 = bench_now_ms();
+        for (long it = 0; it < iters; it++)
+            for (int i = 0; i < 10; i++) a[i] = __builtin_ia32_vfmaddps256(a[i], m, c);
+        double ms = bench_now_ms() - t0;
+        if (ms < best) best = ms;
+    }
+    float sink = 0;
+    for (int i = 0; i < 10; i++) sink += a[i][0];
+    if (sink == 12345.0f) printf(" ");
+    return (double)iters * 10 * 8 * 2 / (best * 1e6);
+}
+
+int bench_kernels(const bench_opts *o)
+{
+    const vs_isa best = vs_isa_detect();
+    const kernel_entry all[] = {
+        {"splat_row1", VS_ISA_SCALAR, 0, (void *)vs_splat_row1_scalar},
+        {"splat_row4", VS_ISA_SCALAR, 1, (void *)vs_splat_row4_scalar},
+        {"splat_row4", VS_ISA_SSE4, 1, (void *)vs_splat_row4_sse4},
+        {"splat_row4", VS_ISA_AVX2, 1, (void *)vs_splat_row4_avx2},
+        {"splat_row4", VS_ISA_AVX512, 1, (void *)vs_splat_row4_avx512},
+        {"splat_row_gs", VS_ISA_SCALAR, 2, (void *)vs_splat_row_gs_scalar},
+        {"splat_row_gs", VS_ISA_SSE4, 2, (void *)vs_splat_row_gs_sse4},
+        {"splat_row_gs", VS_ISA_AVX2, 2, (void *)vs_splat_row_gs_avx2},
+        {"composite", VS_ISA_SCALAR, 3, (void *)vs_composite_scalar},
+    };
+    const int lengths[] = {9, 64};
+    const int nmax = 64 + 64 + 8;
+    float *buf = calloc((size_t)nmax * 4, sizeof(float)), *ex = malloc((size_t)nmax * sizeof(float));
+    float *exd = malloc((size_t)nmax * sizeof(float)), *alpha = malloc((size_t)nmax * sizeof(float));
+    float *rgb = malloc(((size_t)nmax * 3 + 1) * sizeof(float));
+    if (!buf || !ex || !exd || !alpha || !rgb) {
+        fprintf(stderr, "kernels: out of memory\n");
+        return 1;
+    }
+    for (int i = 0; i < nmax; i++) {
+        ex[i] = expf(-0.05f * (float)(i % 9));
+        exd[i] = ex[i] * (float)(i % 9 - 4);
+        alpha[i] = (i % 3) ? 0.05f : 0.0f;
+    }
+    for (int i = 0; i < 3 * nmax + 1; i++) rgb[i] = 0.5f;
+    long reps = o->quick ? 200000 : 2000000;
+    FILE *csv = bench_results_dir(o) == 0 ? bench_result_open(o, "kernels.csv") : NULL;
+    if (csv) fprintf(csv, "kernel,isa,n,ns_per_element,speedup_vs_scalar\n");
+    printf("kernel         isa      n=9 ns/elem  x scalar   n=64 ns/elem  x scalar\n");
+    double scalar_ns[2] = {0, 0};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
+        const kernel_entry *k = &all[i];
+        if (k->isa > best) {
+            printf("%-14s %-8s skipped: this CPU has no %s\n", k->kernel, vs_isa_name(k->isa), vs_isa_name(k->isa));
+            continue;
+        }
+        printf("%-14s %-8s", k->kernel, vs_isa_name(k->isa));
+        for (int l = 0; l < 2; l++) {
+            double ns = time_kernel(k, lengths[l], buf, ex, exd, alpha, rgb, reps);
+            if (k->isa == VS_ISA_SCALAR) scalar_ns[l] = ns;
+            double sp = scalar_ns[l] > 0 ? scalar_ns[l] / ns : 0;
+            printf("   %8.3f    %5.2fx", ns, sp);
+            if (csv) fprintf(csv, "%s,%s,%d,%.4f,%.3f\n", k->kernel, vs_isa_name(k->isa), lengths[l], ns, sp);
+        }
+        printf("\n");
+    }
+    if (best >= VS_ISA_AVX2) {
+        double gf = peak_fma_gflops();
+        printf("peak FMA rate (AVX2, 10 chains): %.1f GFLOP/s per core; a row1 element is 2 flops\n", gf);
+        if (csv) fprintf(csv, "peak_fma_gflops,avx2,0,%.2f,0\n", gf);
+    }
+    if (csv) fclose(csv);
+    free(buf);
+    free(ex);
+    free(exd);
+    free(alpha);
+    free(rgb);
+
+    /* the rasterize stage of a real frame per ISA */
+    vs_volume *vol = NULL;
+    const char *key = "colin27";
+    int lr = bench_load(o, key, &vol);
+    if (lr != 0) {
+        key = "scene:sphere:128";
+        if (bench_load(o, key, &vol) != 0) return lr < 0 ? 1 : 0;
+    }
+    bench_case cases[4];
+    int nc = 0;
+    for (vs_isa isa = VS_ISA_SCALAR; isa <= best && nc < 4; isa = (vs_isa)(isa + 1)) {
+        vs_settings s;
+        vs_settings_init(&s);
+        s.width = s.height = o->quick ? 256 : 512;
+        s.azimuth = 180;
+        s.threads = 1;
+        s.isa = isa;
+        if (!strcmp(key, "colin27")) {
+            s.has_iso = 1;
+            s.iso_lo = 45;
+            s.ramp = 10;
+        }
+        char name[64];
+        snprintf(name, sizeof name, "%s post-cd %s", key, vs_isa_name(isa));
+        bench_case_set(&cases[nc++], name, vol, &s);
+    }
+    int runs = bench_runs(o, 7, 3);
+    int failed = bench_run("kernels", cases, nc, runs);
+    printf("\n%-32s %12s %12s %12s\n", "frame (1 thread)", "rasterize", "x scalar", "total");
+    bench_summary base = bench_summarize(&cases[0], bench_m_raster);
+    for (int c = 0; c < nc; c++) {
+        if (cases[c].failed) continue;
+        bench_summary r = bench_summarize(&cases[c], bench_m_raster), t = bench_summarize(&cases[c], bench_m_total);
+        printf("%-32s %9.1f ms %11.2fx %9.1f ms\n", cases[c].name, r.median, base.median / r.median, t.median);
+    }
+    bench_cases_free(cases, nc);
+    bench_contexts_release();
+    vs_volume_release(vol);
+    return failed ? 1 : 0;
+}

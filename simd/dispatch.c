@@ -1,0 +1,51 @@
+/* Kernel selection: the scalar reference first, then each kernel upgraded
+ * to the best ISA that this CPU and the cap allow, where a version exists
+ * (only where it measured faster: `vsplat-bench kernels`, simd/README.md).
+ * The choice lives in the caller's table (one per frame), never in a
+ * global. */
+#include "kernels.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
+void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
+void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
+
+vs_isa vs_isa_from_env(void)
+{
+    const char *e = getenv("VSPLAT_ISA");
+    vs_isa isa;
+    if (!e || !*e || vs_isa_parse(e, &isa) != VS_OK) return VS_ISA_AUTO;
+    return isa;
+}
+
+void vs_kernels_init(vs_kernels *k, vs_isa cap)
+{
+    vs_isa best = vs_isa_detect();
+    if (cap == VS_ISA_AUTO || cap > best) cap = best;
+    memset(k, 0, sizeof *k);
+    k->isa = VS_ISA_SCALAR;
+    k->splat_row1 = vs_splat_row1_scalar;
+    k->splat_row4 = vs_splat_row4_scalar;
+    k->splat_row_gs = vs_splat_row_gs_scalar;
+    k->composite = vs_composite_scalar;
+#if defined(__x86_64__) || defined(__i386__)
+    if (cap >= VS_ISA_SSE4) {
+        k->isa = VS_ISA_SSE4;
+        k->splat_row4 = vs_splat_row4_sse4;
+        k->splat_row_gs = vs_splat_row_gs_sse4;
+    }
+    if (cap >= VS_ISA_AVX2) {
+        k->isa = VS_ISA_AVX2;
+        k->splat_row4 = vs_splat_row4_avx2;
+        k->splat_row_gs = vs_splat_row_gs_avx2;
+    }
+    if (cap >= VS_ISA_AVX512) {
+        k->isa = VS_ISA_AVX512;
+        k->splat_row4 = vs_splat_row4_avx512;
+    }
+#endif
+}
