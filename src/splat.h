@@ -41,6 +41,8 @@ typedef struct vs_frame {
     int tile, tiles_x, tiles_y, ntiles;
     uint32_t *tile_start;            /* ntiles + 1                               */
     uint32_t *tile_entries;          /* brick indices, per tile in brick order   */
+    int *tile_order;                 /* tasks in order of estimated work, largest
+                                        first (results do not depend on it)     */
     double pad_x, pad_y;             /* footprint half-extent + seam, pixels     */
 
     float *image;                    /* width*height*4 straight RGBA output      */

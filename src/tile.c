@@ -652,6 +652,7 @@ void vs_tile_render(void *arg, int worker, int task)
         double frac = (double)atomic_load(&F->tiles_done) / F->ntiles;
         if (s->progress(s->progress_user, frac)) atomic_store(&F->cancel, 1);
     }
+    task = F->tile_order[task];
     const int W = F->cam.width, T = F->tile;
     const int tx = task % F->tiles_x, ty = task / F->tiles_x;
     tile_ctx t;
