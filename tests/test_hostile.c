@@ -766,7 +766,7 @@ static void test_nifti_hostile(void)
               vs_last_error(ctx));
         if (st == VS_OK) vs_volume_release(v);
     }
-    printf("  %-34s -> all rejected in %.2f s\n", "nifti cut every 7 bytes", now_s() - t0);
+    printf("  %-34s -> %d of them loaded, %.2f s\n", "nifti cut every 7 bytes", loaded, now_s() - t0);
     free(b);
 }
 
