@@ -12,6 +12,7 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
     free(rc->voxels);
     free(rc->grad);
     free(rc->bricks);
+    free(rc->scratch);
     free(rc);
 }
 
@@ -24,31 +25,43 @@ static int in_alpha_range(const vs_classify *c, double v)
     return v >= c->alpha_lo && v <= c->alpha_hi;
 }
 
-/* OR-dilate a byte mask of flag bits along one axis by r voxels (a box
- * dilation is separable: one pass per axis). */
-static void dilate_axis(uint8_t *m, const int d[3], int axis, int r, uint8_t *line)
+/* OR-dilate a byte mask of flag bits by r voxels in a box (separable: one
+ * pass per axis).  Each pass ORs whole contiguous runs — rows for x, rows of
+ * neighbouring rows for y, planes of neighbouring planes for z — so the
+ * compiler vectorises it and memory is read in order.  `tmp` holds a copy
+ * of one plane (x, y passes) or of the whole mask (z pass). */
+static void or_into(uint8_t *dst, const uint8_t *src, size_t n)
 {
-    size_t stride[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
-    int n = d[axis];
-    int o1 = axis == 0 ? 1 : 0, o2 = axis == 2 ? 1 : 2;
-    for (int b = 0; b < d[o2]; b++)
-        for (int a = 0; a < d[o1]; a++) {
-            uint8_t *base = m + a * stride[o1] + b * stride[o2];
-            size_t st = stride[axis];
-            for (int x = 0; x < n; x++) line[x] = base[x * st];
-            for (int x = 0; x < n; x++) {
-                uint8_t v = 0;
-                int lo = x - r < 0 ? 0 : x - r, hi = x + r >= n ? n - 1 : x + r;
-                for (int y = lo; y <= hi; y++) v |= line[y];
-                base[x * st] = v;
-            }
-        }
+    for (size_t i = 0; i < n; i++) dst[i] |= src[i];
 }
 
-static void dilate(uint8_t *m, const int d[3], int r, uint8_t *line)
+static void dilate(uint8_t *m, const int d[3], int r, uint8_t *tmp)
 {
     if (r <= 0) return;
-    for (int axis = 0; axis < 3; axis++) dilate_axis(m, d, axis, r, line);
+    const size_t row = (size_t)d[0], plane = row * d[1], n = plane * d[2];
+    /* x: within each row, shifted copies */
+    for (size_t o = 0; o < n; o += row) {
+        memcpy(tmp, m + o, row);
+        for (int sft = 1; sft <= r && (size_t)sft < row; sft++) {
+            or_into(m + o + sft, tmp, row - sft);
+            or_into(m + o, tmp + sft, row - sft);
+        }
+    }
+    /* y: within each plane, neighbouring rows */
+    for (int z = 0; z < d[2]; z++) {
+        uint8_t *p = m + (size_t)z * plane;
+        memcpy(tmp, p, plane);
+        for (int sft = 1; sft <= r && sft < d[1]; sft++) {
+            or_into(p + sft * row, tmp, plane - sft * row);
+            or_into(p, tmp + sft * row, plane - sft * row);
+        }
+    }
+    /* z: neighbouring planes */
+    memcpy(tmp, m, n);
+    for (int sft = 1; sft <= r && sft < d[2]; sft++) {
+        or_into(m + sft * plane, tmp, n - sft * plane);
+        or_into(m, tmp + sft * plane, n - sft * plane);
+    }
 }
 
 enum { BELOW = 1, INSIDE = 2, ABOVE = 4 };
@@ -60,20 +73,24 @@ static uint8_t class_of(const vs_classify *c, double v)
     return v <= c->alpha_lo ? BELOW : ABOVE;
 }
 
+/* Buffers of the previous list are reused (realloc) so that changing the
+ * iso-range does not pay for fresh, page-faulting allocations each time. */
+static void *take(void **old, size_t bytes)
+{
+    void *p = realloc(*old, bytes ? bytes : 1);
+    if (p) *old = NULL;
+    return p;
+}
+
 static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c, int seam,
-                       int with_grad, vs_relevant_cache *rc)
+                       int with_grad, vs_relevant_cache *rc, vs_relevant_cache *old)
 {
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
-    uint8_t *mask = malloc(n);
-    int maxd = d[0] > d[1] ? d[0] : d[1];
-    if (d[2] > maxd) maxd = d[2];
-    uint8_t *line = malloc((size_t)maxd);
-    if (!mask || !line) {
-        free(mask);
-        free(line);
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
-    }
+    void *none = NULL;
+    uint8_t *mask = take(old ? (void **)&old->scratch : &none, 2 * n); /* mask + dilation scratch */
+    if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    uint8_t *line = mask + n;
     /* integer volumes: classify each possible value once */
     if (vol->type == VS_U8) {
         uint8_t lut[256];
@@ -84,7 +101,6 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
         uint8_t *lut = malloc(65536);
         if (!lut) {
             free(mask);
-            free(line);
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
         }
         int off = vol->type == VS_I16 ? 32768 : 0;
@@ -118,7 +134,6 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
     } else {
         for (size_t i = 0; i < n; i++) mask[i] = (mask[i] & INSIDE) != 0;
     }
-    free(line);
     /* Compact brick by brick: count per brick, prefix sums, fill (the fill
      * walks the grid in k, j, i order, so each brick is in that order too). */
     const int nb[3] = {(d[0] + VS_BRICK - 1) / VS_BRICK, (d[1] + VS_BRICK - 1) / VS_BRICK,
@@ -143,8 +158,10 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
         return vs_set_error(ctx, VS_ERR_TOO_LARGE, "relevant voxels: %zu voxels exceed the limit", count);
     }
     for (size_t b = 0; b < nbt; b++) nonempty += pos[b] != 0;
-    vs_voxel *vox = malloc((count ? count : 1) * sizeof *vox);
-    float *grad = with_grad ? malloc((count ? count : 1) * 3 * sizeof(float)) : NULL;
+    vs_voxel *vox = old ? take((void **)&old->voxels, count * sizeof *vox) : malloc((count ? count : 1) * sizeof *vox);
+    float *grad = !with_grad ? NULL
+                  : old    ? take((void **)&old->grad, count * 3 * sizeof(float))
+                           : malloc((count ? count : 1) * 3 * sizeof(float));
     vs_brick *bricks = malloc((nonempty ? nonempty : 1) * sizeof *bricks);
     if (!vox || (with_grad && !grad) || !bricks) {
         free(mask);
@@ -208,7 +225,7 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
     free(pos);
     rc->nbricks = nbk;
     rc->bricks = bricks;
-    free(mask);
+    rc->scratch = mask; /* kept for the next rebuild */
     rc->count = count;
     rc->voxels = vox;
     rc->grad = grad;
@@ -226,14 +243,18 @@ vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs
         *out = rc;
         return VS_OK;
     }
-    vs_relevant_cache_free(rc);
+    vs_relevant_cache *old = rc;
     ctx->relevant = NULL;
     rc = calloc(1, sizeof *rc);
-    if (!rc) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    if (!rc) {
+        vs_relevant_cache_free(old);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    }
     double t0 = vs_now_ms();
-    vs_status st = build(ctx, vol, c, seam, with_grad, rc);
+    vs_status st = build(ctx, vol, c, seam, with_grad, rc, old);
+    vs_relevant_cache_free(old); /* what build did not take over */
     if (st != VS_OK) {
-        free(rc);
+        vs_relevant_cache_free(rc);
         return st;
     }
     rc->vol = vol;

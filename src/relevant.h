@@ -36,6 +36,7 @@ typedef struct vs_relevant_cache {
     float *grad;           /* 3 per voxel, index units (with_grad only) */
     size_t nbricks;
     vs_brick *bricks;      /* non-empty bricks only                     */
+    uint8_t *scratch;      /* 2 bytes per grid voxel, kept for rebuilds */
     double build_ms;
 } vs_relevant_cache;
 
