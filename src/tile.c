@@ -226,28 +226,35 @@ static void splat_rows_gs(const tile_ctx *t, const foot_rows *fr, float wD, floa
     merge_box(bb, &fr->box);
 }
 
+/* General (sheared or rotated-ellipse) footprints: the weights of row y
+ * into t->ex[xa..xb]; 0 if the row misses the footprint. */
+static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, int *xb)
+{
+    const vs_footprint *fp = t->fp;
+    float dy = (float)(y + t->oy) - sec->cy, er, cxr;
+    if (!cols_of(t, sec, dy, &er, &cxr, xa, xb)) return 0;
+    for (int x = *xa; x <= *xb; x++) {
+        float dx = (float)(x + t->ox) - cxr;
+        t->ex[x] = vs_fp_exp(fp, er + fp->A * dx * dx);
+    }
+    return 1;
+}
+
 /* Density only (post-cd): one channel. */
 static void raster1(const tile_ctx *t, const section *sec, float w, float *q, rect *bb)
 {
-    const vs_footprint *fp = t->fp;
-    int ya, yb;
+    int ya, yb, xa, xb;
     if (!rows_of(t, sec, &ya, &yb)) return;
     w *= sec->D;
-    if (fp->separable) {
+    if (t->fp->separable) {
         foot_rows fr;
         prepare_rows(t, sec, 0, &fr);
         splat_rows1(t, &fr, w, q, bb);
         return;
     }
     for (int y = ya; y <= yb; y++) {
-        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
-        int xa, xb;
-        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
-        float *row = q + (size_t)y * t->bw;
-        for (int x = xa; x <= xb; x++) {
-            float dx = (float)(x + t->ox) - cxr;
-            row[x] += w * vs_fp_exp(fp, er + fp->A * dx * dx);
-        }
+        if (!row_footprint(t, sec, y, &xa, &xb)) continue;
+        t->F->kern.splat_row1(q + (size_t)y * t->bw + xa, t->ex + xa, w, xb - xa + 1);
         grow(bb, xa, xb, y);
     }
 }
@@ -255,30 +262,18 @@ static void raster1(const tile_ctx *t, const section *sec, float w, float *q, re
 /* Four interleaved channels with their own weights (pre, post-alpha). */
 static void raster4(const tile_ctx *t, const section *sec, const float w4[4], float *buf, rect *bb)
 {
-    const vs_footprint *fp = t->fp;
-    int ya, yb;
+    int ya, yb, xa, xb;
     if (!rows_of(t, sec, &ya, &yb)) return;
     float w[4] = {w4[0] * sec->D, w4[1] * sec->D, w4[2] * sec->D, w4[3] * sec->D};
-    if (fp->separable) {
+    if (t->fp->separable) {
         foot_rows fr;
         prepare_rows(t, sec, 0, &fr);
         splat_rows4(t, &fr, w, buf, bb);
         return;
     }
     for (int y = ya; y <= yb; y++) {
-        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
-        int xa, xb;
-        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
-        float *row = buf + (size_t)y * t->bw * 4;
-        for (int x = xa; x <= xb; x++) {
-            float dx = (float)(x + t->ox) - cxr;
-            float h = vs_fp_exp(fp, er + fp->A * dx * dx);
-            float *p = row + 4 * x;
-            p[0] += w[0] * h;
-            p[1] += w[1] * h;
-            p[2] += w[2] * h;
-            p[3] += w[3] * h;
-        }
+        if (!row_footprint(t, sec, y, &xa, &xb)) continue;
+        t->F->kern.splat_row4(buf + ((size_t)y * t->bw + xa) * 4, t->ex + xa, w, xb - xa + 1);
         grow(bb, xa, xb, y);
     }
 }
