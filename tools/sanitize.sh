@@ -5,8 +5,8 @@
 # Usage: tools/sanitize.sh [asan|tsan]...   (default: both)
 # Tests honour VSPLAT_TEST_QUICK=1 (smaller images and volumes, shorter soak).
 # Every sanitizer halts on the first report, so a finding fails its test.
-# Suppressions: none (a report is a bug to fix, or, for a third-party
-# library, a suppression with its reason in tools/sanitize.supp).
+# Suppressions only for third-party libraries, each with its reason:
+# tools/sanitize.supp (LeakSanitizer), tools/sanitize-tsan.supp (TSan).
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -38,8 +38,8 @@ for kind in "${kinds[@]}"; do
         # gcc's TSan works too, but clang's is the reference implementation
         cmake -S "$ROOT" -B "$B" -DVSPLAT_SANITIZE=thread -DVSPLAT_WERROR=ON \
             -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >/dev/null
-        # (no suppressions: tools/sanitize.supp holds LSan entries, which TSan cannot parse)
-        env_vars=("TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1")
+        # its own file: TSan cannot parse the LSan entries of sanitize.supp
+        env_vars=("TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$ROOT/tools/sanitize-tsan.supp")
         ;;
     *)
         echo "sanitize.sh: unknown kind '$kind' (asan, tsan)" >&2
