@@ -29,6 +29,9 @@ struct vs_volume {
     vs_analytic analytic;
     double default_iso;  /* scene's iso; NAN if none                          */
     double default_ramp; /* scene's ramp; NAN if none                         */
+    uint64_t serial;     /* unique per allocation and per vs_volume_update_range:
+                            what caches key on (an address can be reused, and
+                            data rewritten in place keeps it) */
 };
 
 size_t vs_type_size(vs_type t);

@@ -237,7 +237,7 @@ vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs
 {
     vs_relevant_cache *rc = ctx->relevant;
     *rebuilt = 0;
-    if (rc && rc->vol == vol && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
+    if (rc && rc->vol == vol && rc->serial == vol->serial && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
         rc->vmax == vol->vmax && rc->alpha_lo == c->alpha_lo && rc->alpha_hi == c->alpha_hi &&
         rc->seam == seam && rc->with_grad >= with_grad) {
         *out = rc;
@@ -258,6 +258,7 @@ vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs
         return st;
     }
     rc->vol = vol;
+    rc->serial = vol->serial;
     memcpy(rc->dims, vol->dims, sizeof rc->dims);
     rc->vmin = vol->vmin;
     rc->vmax = vol->vmax;

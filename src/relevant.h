@@ -24,6 +24,8 @@ typedef struct vs_brick {
 typedef struct vs_relevant_cache {
     /* key: what the list was built from */
     const struct vs_volume *vol;
+    uint64_t serial;       /* vol->serial when built: a new volume at the same
+                              address, or rewritten data, does not match */
     int dims[3];
     double vmin, vmax;
     double alpha_lo, alpha_hi;

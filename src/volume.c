@@ -3,9 +3,12 @@
 #include "internal.h"
 
 #include <float.h>
+#include <stdatomic.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+static atomic_uint_fast64_t volume_serial;
 
 size_t vs_type_size(vs_type t)
 {
@@ -65,6 +68,7 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
     }
     v->default_iso = NAN;
     v->default_ramp = NAN;
+    v->serial = atomic_fetch_add(&volume_serial, 1) + 1;
     *out = v;
     return VS_OK;
 }
@@ -116,6 +120,7 @@ void vs_volume_update_range(vs_volume *v)
     if (lo > hi) lo = hi = 0.0; /* no finite value at all */
     v->vmin = lo;
     v->vmax = hi;
+    v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* the data may have changed */
 }
 
 double vs_volume_default_iso(const vs_volume *v)
