@@ -16,7 +16,7 @@
 static vs_context *fz_ctx;
 
 /* A file name per process (libFuzzer -jobs/-workers run processes). */
-static const char *fz_path(const char *suffix)
+static inline const char *fz_path(const char *suffix)
 {
     static char path[512];
     const char *t = getenv("TMPDIR");
@@ -24,7 +24,7 @@ static const char *fz_path(const char *suffix)
     return path;
 }
 
-static int fz_write(const char *path, const uint8_t *data, size_t size)
+static inline int fz_write(const char *path, const uint8_t *data, size_t size)
 {
     FILE *f = fopen(path, "wb");
     if (!f) return 0;
@@ -34,7 +34,7 @@ static int fz_write(const char *path, const uint8_t *data, size_t size)
 }
 
 /* Load `data` as a file ending in `suffix` (opt may be NULL). */
-static void fz_load(const uint8_t *data, size_t size, const char *suffix, const vs_load_options *opt)
+static inline void fz_load(const uint8_t *data, size_t size, const char *suffix, const vs_load_options *opt)
 {
     if (!fz_ctx && vs_context_create(&fz_ctx) != VS_OK) abort();
     const char *path = fz_path(suffix);
