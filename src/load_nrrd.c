@@ -79,16 +79,17 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
     vs_status st = vs_load_file_size(ctx, path, &fsize);
     if (st != VS_OK) return st;
     if (fsize == 0) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: empty file", path);
-    /* .nrrd and .nhdr files start with the magic "NRRD000N".  Without it
+    /* .nrrd and .nhdr files start with the line "NRRD000N".  Without it
      * Teem tries its other formats (a plain-text table, PNM, ...), slowly,
      * and leaks on the text table's error paths (fuzz_nrrd): refuse first. */
     {
-        char magic[8] = {0};
+        char magic[9] = {0};
         FILE *f = fopen(path, "rb");
         if (!f) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open", path);
         size_t got = fread(magic, 1, sizeof magic, f);
         fclose(f);
-        if (got != sizeof magic || memcmp(magic, "NRRD000", 7) != 0 || magic[7] < '1' || magic[7] > '9')
+        if (got != sizeof magic || memcmp(magic, "NRRD000", 7) != 0 || magic[7] < '1' || magic[7] > '9' ||
+            (magic[8] != '\n' && magic[8] != '\r'))
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: not a NRRD file (no NRRD magic at the start)", path);
     }
 
