@@ -39,6 +39,7 @@ summary=()
 for t in "${targets[@]}"; do
     corpus="$B/corpus/$t"
     crashes="$B/crashes/$t"
+    rm -rf "$crashes" # earlier findings were copied to tests/fuzz/regressions already
     mkdir -p "$corpus" "$crashes"
     cp -n "$ROOT/tests/fuzz/seeds/$t/"* "$corpus/" 2>/dev/null || true
     log="$B/fuzz_$t.log"
