@@ -16,19 +16,32 @@ void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const 
 void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
 void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
 void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8]);
+typedef void (*block_fn)(float *, ptrdiff_t, const float *, ptrdiff_t, int, int, const float *);
 
 typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
-    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite */
+    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block */
     void *fn;
 } kernel_entry;
+
+/* Footprint blocks: 8 rows of n floats (n rounded down to whole 8-float
+ * vectors, at least one) into a sheet row stride of 200 floats. */
+enum { BLOCK_ROWS = 8, BLOCK_DS = 200 };
+static int block_nvec(int n) { return n < 8 ? 1 : n / 8; }
 
 /* Time `reps` calls over a buffer of rows; returns ns per element. */
 static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, float *exd, float *alpha, float *rgb,
                           long reps)
 {
     const float w4[4] = {0.25f, 0.5f, 0.75f, 1.0f};
+    const float w8[8] = {0.25f, 0.5f, 0.75f, 1.0f, 0.25f, 0.5f, 0.75f, 1.0f};
     double best = 1e30;
     for (int trial = 0; trial < 5; trial++) {
         double t0 = bench_now_ms();
@@ -43,6 +56,9 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 ((void (*)(float *, const float *, const float *, const float *, int))k->fn)(buf + 4 * off, ex + off,
                                                                                          exd + off, w4, n);
                 break;
+            case 4:
+                ((block_fn)k->fn)(buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), w8);
+                break;
             default:
                 if ((r & 1023) == 0) memset(buf, 0, (size_t)(4 * (64 + n)) * sizeof(float));
                 ((int (*)(float *, const float *, const float *, int, float))k->fn)(buf + 4 * off, alpha + off,
@@ -52,7 +68,8 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    return best * 1e6 / ((double)reps * n);
+    double elems = k->kind == 4 ? 8.0 * block_nvec(n) * BLOCK_ROWS : n;
+    return best * 1e6 / ((double)reps * elems);
 }
 
 /* Peak single-precision FMA rate: 10 independent 8-wide chains. */
@@ -90,16 +107,24 @@ int bench_kernels(const bench_opts *o)
         {"splat_row_gs", VS_ISA_SSE4, 2, (void *)vs_splat_row_gs_sse4},
         {"splat_row_gs", VS_ISA_AVX2, 2, (void *)vs_splat_row_gs_avx2},
         {"composite", VS_ISA_SCALAR, 3, (void *)vs_composite_scalar},
+        {"splat_block", VS_ISA_SCALAR, 4, (void *)vs_splat_block_scalar},
+        {"splat_block", VS_ISA_SSE4, 4, (void *)vs_splat_block_sse4},
+        {"splat_block", VS_ISA_AVX2, 4, (void *)vs_splat_block_avx2},
+        {"splat_block", VS_ISA_AVX512, 4, (void *)vs_splat_block_avx512},
     };
     const int lengths[] = {9, 64};
     const int nmax = 64 + 64 + 8;
-    float *buf = calloc((size_t)nmax * 4, sizeof(float)), *ex = malloc((size_t)nmax * sizeof(float));
+    /* rows of 4 channels, or BLOCK_ROWS sheet rows of a block */
+    const size_t nbuf = (size_t)BLOCK_ROWS * BLOCK_DS + 64 > (size_t)nmax * 4 ? (size_t)BLOCK_ROWS * BLOCK_DS + 64
+                                                                             : (size_t)nmax * 4;
+    float *buf = calloc(nbuf, sizeof(float)), *ex = malloc((size_t)8 * nmax * sizeof(float));
     float *exd = malloc((size_t)nmax * sizeof(float)), *alpha = malloc((size_t)nmax * sizeof(float));
     float *rgb = malloc(((size_t)nmax * 3 + 1) * sizeof(float));
     if (!buf || !ex || !exd || !alpha || !rgb) {
         fprintf(stderr, "kernels: out of memory\n");
         return 1;
     }
+    for (int i = 0; i < 8 * nmax; i++) ex[i] = expf(-0.05f * (float)(i % 9)); /* also the blocks */
     for (int i = 0; i < nmax; i++) {
         ex[i] = expf(-0.05f * (float)(i % 9));
         exd[i] = ex[i] * (float)(i % 9 - 4);
@@ -109,7 +134,8 @@ int bench_kernels(const bench_opts *o)
     long reps = o->quick ? 200000 : 2000000;
     FILE *csv = bench_results_dir(o) == 0 ? bench_result_open(o, "kernels.csv") : NULL;
     if (csv) fprintf(csv, "kernel,isa,n,ns_per_element,speedup_vs_scalar\n");
-    printf("kernel         isa      n=9 ns/elem  x scalar   n=64 ns/elem  x scalar\n");
+    printf("kernel         isa      n=9 ns/elem  x scalar   n=64 ns/elem  x scalar"
+           "   (splat_block: 8 rows of 8 / 64 floats)\n");
     double scalar_ns[2] = {0, 0};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         const kernel_entry *k = &all[i];

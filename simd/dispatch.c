@@ -13,6 +13,12 @@ void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const 
 void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
 void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
 void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8]);
 
 vs_isa vs_isa_from_env(void)
 {
@@ -32,20 +38,24 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->splat_row4 = vs_splat_row4_scalar;
     k->splat_row_gs = vs_splat_row_gs_scalar;
     k->composite = vs_composite_scalar;
+    k->splat_block = vs_splat_block_scalar;
 #if defined(__x86_64__) || defined(__i386__)
     if (cap >= VS_ISA_SSE4) {
         k->isa = VS_ISA_SSE4;
         k->splat_row4 = vs_splat_row4_sse4;
         k->splat_row_gs = vs_splat_row_gs_sse4;
+        k->splat_block = vs_splat_block_sse4;
     }
     if (cap >= VS_ISA_AVX2) {
         k->isa = VS_ISA_AVX2;
         k->splat_row4 = vs_splat_row4_avx2;
         k->splat_row_gs = vs_splat_row_gs_avx2;
+        k->splat_block = vs_splat_block_avx2;
     }
     if (cap >= VS_ISA_AVX512) {
         k->isa = VS_ISA_AVX512;
         k->splat_row4 = vs_splat_row4_avx512;
+        k->splat_block = vs_splat_block_avx512;
     }
 #endif
 }

@@ -49,3 +49,13 @@ int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n,
     }
     return crossed;
 }
+
+void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8])
+{
+    for (int r = 0; r < rows; r++) {
+        float *d = dst + r * ds;
+        const float *b = blk + r * bs;
+        for (int i = 0; i < 8 * nvec; i++) d[i] += w8[i % 8] * b[i];
+    }
+}

@@ -13,6 +13,8 @@
 
 #include "vsplat.h"
 
+#include <stddef.h>
+
 typedef struct vs_kernels {
     vs_isa isa; /* the ISA cap in force (what the stats report) */
     /* row[i] += w * ex[i], i in [0, n) */
@@ -26,6 +28,10 @@ typedef struct vs_kernels {
      *   w = (1 - acc[4i+3]) * alpha[i]; acc[4i+c] += w * rgb[3i+c]; acc[4i+3] += w (<= 1);
      * returns how many pixels crossed the opacity threshold thr */
     int (*composite)(float *acc, const float *alpha, const float *rgb, int n, float thr);
+    /* a footprint block (src/block.h) into a sheet:
+     *   dst[r ds + i] += w8[i % 8] * blk[r bs + i], r < rows, i < 8 nvec */
+    void (*splat_block)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                        const float w8[8]);
 } vs_kernels;
 
 /* Scalar reference kernels (src/kernels.c). */
@@ -33,6 +39,8 @@ void vs_splat_row1_scalar(float *row, const float *ex, float w, int n);
 void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n);
 void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n);
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);
+void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8]);
 
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports
  * (simd/dispatch.c). */

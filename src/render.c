@@ -131,6 +131,7 @@ static vs_status check_settings(vs_context *ctx, const vs_settings *s)
 static void free_frame(vs_frame *F)
 {
     vs_footprint_free(&F->fp);
+    vs_block_free(&F->blk);
     vs_shade_lut_free(&F->lut);
     free(F->cls);
     free(F->bview);
@@ -168,6 +169,23 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         vs_kernels_init(&F.kern, cap);
     }
     if ((rc = vs_footprint_setup(ctx, s, &F.cam, &F.fp)) != VS_OK) goto fail;
+    {
+        /* separable footprints go voxel at a time with footprint blocks,
+         * when a ring of sheets holds every sheet one kernel reaches and a
+         * block stays small (else the general sheet-at-a-time path) */
+        int vspan = (int)ceilf(2.0f * (float)F.fp.rz / (float)F.fp.slab) + 1;
+        int ch = s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4;
+        double det = (double)F.fp.A * F.fp.C - (double)F.fp.B * F.fp.B;
+        double nx = 2.0 * sqrt(F.fp.emax * F.fp.C / det) + 1, ny = 2.0 * sqrt(F.fp.emax * F.fp.A / det) + 1;
+        if (F.fp.separable && vspan <= VS_MAX_VSPAN && nx <= VS_BLOCK_MAX_SPAN && ny <= VS_BLOCK_MAX_SPAN &&
+            nx * ny * ch <= (double)(1 << 20)) {
+            if (!vs_block_setup(&F.blk, &F.fp, ch, s->pipeline == VS_PIPELINE_POST_GS)) {
+                rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "footprint blocks: out of memory");
+                goto fail;
+            }
+            F.use_blocks = 1;
+        }
+    }
     if (!s->exact_normals && (rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, &F.lut)) != VS_OK)
         goto fail;
     for (int i = 0; i < VS_TF_TABLE; i++)

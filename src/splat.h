@@ -3,6 +3,7 @@
 #ifndef VS_SPLAT_H
 #define VS_SPLAT_H
 
+#include "block.h"
 #include "footprint.h"
 #include "kernels.h"
 #include "normals.h"
@@ -25,6 +26,9 @@ typedef struct vs_frame {
     vs_classify *cls;
     vs_light light;
     vs_footprint fp;
+    int use_blocks;                  /* separable footprints: voxel at a time with
+                                        footprint blocks (src/block.h)           */
+    vs_block_geom blk;
     vs_shade_lut lut;
     vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;
@@ -51,6 +55,12 @@ typedef struct vs_frame {
     atomic_int tiles_done;
     vs_worker_stats *wstats;         /* one per worker                           */
 } vs_frame;
+
+/* Pixels of sheet-buffer apron left and right of a tile's buffer: a
+ * footprint block vector (8 floats) spills at most 7 pixels past it. */
+#define VS_APRON 8
+/* Most sheets one kernel may reach on the voxel-at-a-time path. */
+#define VS_MAX_VSPAN 64
 
 /* Render tile `task` of the frame (a vs_task_fn). */
 void vs_tile_render(void *frame, int worker, int task);

@@ -39,6 +39,10 @@ typedef struct tile_ctx {
     const vs_footprint *fp;
     int x0, y0, tw, th;  /* own pixels in image coordinates                 */
     int bw, bh;          /* buffer size: own pixels plus a one-pixel seam    */
+    int stride;          /* pixels per buffer row: bw plus an apron of
+                            VS_APRON pixels each side, which footprint
+                            blocks may spill into (cleared, never shaded)   */
+    float *blk;          /* scratch: one voxel's footprint block             */
     int ox, oy;          /* image coordinates of buffer pixel (0,0)          */
     float rx0;           /* footprint half-width without shift               */
     float *ex, *exd;     /* scratch: one footprint row of weights (bw each)  */
@@ -118,63 +122,6 @@ static inline void grow(rect *bb, int xa, int xb, int y)
     if (y + 1 > bb->y1) bb->y1 = y + 1;
 }
 
-/* Separable footprints (B = 0, no shear): exp(-A dx^2 - C dy^2) is a column
- * weight times a row weight, so a section needs width + height table
- * look-ups instead of width x height.  The pixel set is unchanged: each row
- * still spans only the ellipse's chord.  Returns the first buffer column of
- * ex[] (and fills exd[] = ex * dx when asked, for the gradient splats). */
-static inline int row_weights(const tile_ctx *t, const section *sec, int with_dx, int *n)
-{
-    const vs_footprint *fp = t->fp;
-    int a = (int)ceilf(sec->cx - t->rx0) - t->ox, b = (int)floorf(sec->cx + t->rx0) - t->ox;
-    if (a < 0) a = 0;
-    if (b > t->bw - 1) b = t->bw - 1;
-    *n = b - a + 1;
-    for (int x = a; x <= b; x++) {
-        float dx = (float)(x + t->ox) - sec->cx;
-        t->ex[x] = vs_fp_exp(fp, fp->A * dx * dx);
-        if (with_dx) t->exd[x] = t->ex[x] * dx;
-    }
-    return a;
-}
-
-/* A separable footprint laid out once per voxel: the column weights
- * (t->ex, t->exd), and per buffer row its chord [xa, xb] and row weight.
- * None of it depends on the sheet, so a voxel splatted into several sheets
- * pays for it once; each sheet then costs one multiply-add per pixel. */
-typedef struct foot_rows {
-    int ya, yb;   /* rows touched (ya > yb: none)     */
-    rect box;     /* union of the chords              */
-} foot_rows;
-
-static void prepare_rows(const tile_ctx *t, const section *sec, int with_dx, foot_rows *fr)
-{
-    int n;
-    fr->ya = 1;
-    fr->yb = 0;
-    rect_clear(&fr->box);
-    row_weights(t, sec, with_dx, &n);
-    if (n <= 0 || !rows_of(t, sec, &fr->ya, &fr->yb)) {
-        fr->ya = 1;
-        fr->yb = 0;
-        return;
-    }
-    for (int y = fr->ya; y <= fr->yb; y++) {
-        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
-        int xa, xb;
-        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) {
-            t->rxa[y] = 1;
-            t->rxb[y] = 0;
-            continue;
-        }
-        t->rxa[y] = xa;
-        t->rxb[y] = xb;
-        t->rey[y] = vs_fp_exp(t->fp, er);
-        t->rdy[y] = dy;
-        grow(&fr->box, xa, xb, y);
-    }
-}
-
 static inline void merge_box(rect *bb, const rect *r)
 {
     if (rect_empty(r)) return;
@@ -182,48 +129,6 @@ static inline void merge_box(rect *bb, const rect *r)
     if (r->y0 < bb->y0) bb->y0 = r->y0;
     if (r->x1 > bb->x1) bb->x1 = r->x1;
     if (r->y1 > bb->y1) bb->y1 = r->y1;
-}
-
-/* w: the voxel's weight times the slab's depth integral */
-static void splat_rows1(const tile_ctx *t, const foot_rows *fr, float w, float *q, rect *bb)
-{
-    const float *ex = t->ex;
-    for (int y = fr->ya; y <= fr->yb; y++) {
-        int xa = t->rxa[y], xb = t->rxb[y];
-        float wy = w * t->rey[y];
-        float *row = q + (size_t)y * t->bw;
-        t->F->kern.splat_row1(row + xa, ex + xa, wy, xb - xa + 1);
-    }
-    merge_box(bb, &fr->box);
-}
-
-static void splat_rows4(const tile_ctx *t, const foot_rows *fr, const float w[4], float *buf, rect *bb)
-{
-    const float *ex = t->ex;
-    for (int y = fr->ya; y <= fr->yb; y++) {
-        int xa = t->rxa[y], xb = t->rxb[y];
-        float ey = t->rey[y];
-        const float wy[4] = {w[0] * ey, w[1] * ey, w[2] * ey, w[3] * ey};
-        float *row = buf + (size_t)y * t->bw * 4;
-        t->F->kern.splat_row4(row + 4 * xa, ex + xa, wy, xb - xa + 1);
-    }
-    merge_box(bb, &fr->box);
-}
-
-/* Gradient splats, B = 0 and Qxz = 0 (the coupling terms vanish):
- * wD = weight x depth integral, wE = weight x depth-derivative integral. */
-static void splat_rows_gs(const tile_ctx *t, const foot_rows *fr, float wD, float wE, float *buf, rect *bb)
-{
-    const vs_footprint *fp = t->fp;
-    const float *ex = t->ex, *exd = t->exd;
-    for (int y = fr->ya; y <= fr->yb; y++) {
-        int xa = t->rxa[y], xb = t->rxb[y];
-        float ey = t->rey[y];
-        const float c[4] = {wD * ey, -2.0f * wD * fp->A * ey, -2.0f * wD * fp->row_k * t->rdy[y] * ey, wE * ey};
-        float *row = buf + (size_t)y * t->bw * 4;
-        t->F->kern.splat_row_gs(row + 4 * xa, ex + xa, exd + xa, c, xb - xa + 1);
-    }
-    merge_box(bb, &fr->box);
 }
 
 /* General (sheared or rotated-ellipse) footprints: the weights of row y
@@ -246,15 +151,9 @@ static void raster1(const tile_ctx *t, const section *sec, float w, float *q, re
     int ya, yb, xa, xb;
     if (!rows_of(t, sec, &ya, &yb)) return;
     w *= sec->D;
-    if (t->fp->separable) {
-        foot_rows fr;
-        prepare_rows(t, sec, 0, &fr);
-        splat_rows1(t, &fr, w, q, bb);
-        return;
-    }
     for (int y = ya; y <= yb; y++) {
         if (!row_footprint(t, sec, y, &xa, &xb)) continue;
-        t->F->kern.splat_row1(q + (size_t)y * t->bw + xa, t->ex + xa, w, xb - xa + 1);
+        t->F->kern.splat_row1(q + (size_t)y * t->stride + xa, t->ex + xa, w, xb - xa + 1);
         grow(bb, xa, xb, y);
     }
 }
@@ -265,15 +164,9 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
     int ya, yb, xa, xb;
     if (!rows_of(t, sec, &ya, &yb)) return;
     float w[4] = {w4[0] * sec->D, w4[1] * sec->D, w4[2] * sec->D, w4[3] * sec->D};
-    if (t->fp->separable) {
-        foot_rows fr;
-        prepare_rows(t, sec, 0, &fr);
-        splat_rows4(t, &fr, w, buf, bb);
-        return;
-    }
     for (int y = ya; y <= yb; y++) {
         if (!row_footprint(t, sec, y, &xa, &xb)) continue;
-        t->F->kern.splat_row4(buf + ((size_t)y * t->bw + xa) * 4, t->ex + xa, w, xb - xa + 1);
+        t->F->kern.splat_row4(buf + ((size_t)y * t->stride + xa) * 4, t->ex + xa, w, xb - xa + 1);
         grow(bb, xa, xb, y);
     }
 }
@@ -290,17 +183,11 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
     float wD = w * sec->D, wE = w * sec->E;
     float A = fp->A, B = fp->B, rk = fp->row_k;
     float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
-    if (fp->separable) {
-        foot_rows fr;
-        prepare_rows(t, sec, 1, &fr);
-        splat_rows_gs(t, &fr, wD, wE, buf, bb);
-        return;
-    }
     for (int y = ya; y <= yb; y++) {
         float dy = (float)(y + t->oy) - sec->cy, er, cxr;
         int xa, xb;
         if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
-        float *row = buf + (size_t)y * t->bw * 4;
+        float *row = buf + (size_t)y * t->stride * 4;
         for (int x = xa; x <= xb; x++) {
             float dx = (float)(x + t->ox) - cxr;
             float h = vs_fp_exp(fp, er + A * dx * dx);
@@ -337,11 +224,11 @@ static void build_sat(const tile_ctx *t, const float *acc, float thr, int *sat)
     }
 }
 
-static void clear_rect(float *buf, int bw, int ch, const rect *r)
+static void clear_rect(float *buf, int stride, int ch, const rect *r)
 {
     if (rect_empty(r)) return;
     for (int y = r->y0; y < r->y1; y++)
-        memset(buf + ((size_t)y * bw + r->x0) * ch, 0, (size_t)(r->x1 - r->x0) * ch * sizeof(float));
+        memset(buf + ((ptrdiff_t)y * stride + r->x0) * ch, 0, (size_t)(r->x1 - r->x0) * ch * sizeof(float));
 }
 
 /* A voxel of an expanded brick, from its first sheet to its last. */
@@ -466,7 +353,7 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
         e->v = v;
         e->kl = kl;
         e->next = -1;
-        voxel_weights(F, v, e->w);
+        if (!F->use_blocks) voxel_weights(F, v, e->w); /* else once it survives culling */
         int slot = kf - ts->kmin;
         if (ts->tail[slot] >= 0)
             ts->p[ts->tail[slot]].next = ts->np;
@@ -519,40 +406,89 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
     }
 }
 
+/* Depth integrals of a voxel at depth z over the slabs of sheets k0..k1
+ * (D), and for gradient splats the integrals of its depth derivative (E):
+ * neighbouring slabs share a boundary, so each boundary is looked up once.
+ * Unsheared footprints only (the section centre does not move with depth). */
+static void depth_weights(const vs_footprint *fp, float z, int k0, int k1, int with_e, float *D, float *E)
+{
+    const float slab = (float)fp->slab, rz = (float)fp->rz, kap = (float)fp->kappa;
+    float b = (float)k0 * slab - z;
+    float g0 = vs_fp_depth(fp, b), e0 = 0.0f;
+    if (with_e) e0 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
+    for (int k = k0; k <= k1; k++) {
+        b = (float)(k + 1) * slab - z;
+        float g1 = vs_fp_depth(fp, b);
+        D[k - k0] = g1 - g0;
+        g0 = g1;
+        if (with_e) {
+            float e1 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
+            E[k - k0] = e1 - e0;
+            e0 = e1;
+        }
+    }
+}
+
 /* Voxel at a time (separable footprints): each voxel starting at sheet
- * `opening` is tested once against the occlusion map and splatted into every
- * sheet its kernel reaches, reusing its row weights; sheet k lives in ring
- * slot (k - kbase) mod R. */
+ * `opening` is tested once against the occlusion map, builds its footprint
+ * block once (src/block.h) and adds it, weighted by each slab's depth
+ * integral, to every sheet its kernel reaches; sheet k lives in ring slot
+ * (k - kbase) mod R.  Only the block's rows inside the buffer and its
+ * vectors that overlap it are built and added; a vector may spill up to
+ * 8/ch - 1 pixels into the apron. */
 static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase)
 {
     const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
+    const vs_block_geom *g = &F->blk;
+    const int ch = g->ch, ppv = 8 / ch, bs = 8 * g->nvec;
+    const vs_pipeline pl = F->pipeline;
+    const float A = F->fp.A, rk = F->fp.row_k;
     for (int i = ts->head[opening - ts->kmin]; i >= 0; i = ts->p[i].next) {
         const pend *e = &ts->p[i];
         if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y)) {
             ts->ws->culled++;
             continue;
         }
-        section sec;
-        sec.cx = e->x;
-        sec.cy = e->y;
-        foot_rows fr;
-        prepare_rows(t, &sec, F->pipeline == VS_PIPELINE_POST_GS, &fr);
-        if (fr.ya > fr.yb) continue;
+        vs_block_place pl_;
+        vs_block_place_at(g, e->x, e->y, &pl_);
+        /* rows [j0, j1) and vectors [v0, v1) of the block inside the buffer */
+        int by = pl_.y - t->oy, bx = pl_.x - t->ox;
+        int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+        int v0 = bx < 0 ? -bx / ppv : 0;
+        int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+        if (v1 > g->nvec) v1 = g->nvec;
+        if (j0 >= j1 || v0 >= v1) continue;
+        vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
+        const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
+        const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
+        const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
+        const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+        float wv[4];
+        voxel_weights(F, e->v, wv);
+        float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
+        depth_weights(&F->fp, e->z, opening, e->kl, pl == VS_PIPELINE_POST_GS, D, E);
         for (int k = opening; k <= e->kl; k++) {
-            if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
+            const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f};
+            if (!(sec.D > 0.0f)) continue;
             ts->ws->splatted++;
             int slot = (k - kbase) % R;
-            switch (F->pipeline) {
-            case VS_PIPELINE_POST_CD: splat_rows1(t, &fr, e->w[0] * sec.D, ring[slot], &bbs[slot]); break;
-            case VS_PIPELINE_POST_GS:
-                splat_rows_gs(t, &fr, e->w[0] * sec.D, e->w[0] * sec.E, ring[slot], &bbs[slot]);
-                break;
-            default: {
-                float wk[4] = {e->w[0] * sec.D, e->w[1] * sec.D, e->w[2] * sec.D, e->w[3] * sec.D};
-                splat_rows4(t, &fr, wk, ring[slot], &bbs[slot]);
+            float w8[8];
+            if (pl == VS_PIPELINE_POST_CD) {
+                float w = wv[0] * sec.D;
+                for (int c = 0; c < 8; c++) w8[c] = w;
+            } else if (pl == VS_PIPELINE_POST_GS) {
+                float wD = wv[0] * sec.D;
+                w8[0] = wD;
+                w8[1] = -2.0f * wD * A;
+                w8[2] = -2.0f * wD * rk;
+                w8[3] = wv[0] * sec.E;
+                for (int c = 4; c < 8; c++) w8[c] = w8[c - 4];
+            } else {
+                for (int c = 0; c < 4; c++) w8[c] = w8[c + 4] = wv[c] * sec.D;
             }
-            }
+            F->kern.splat_block(ring[slot] + off, ds, src, bs, j1 - j0, v1 - v0, w8);
+            merge_box(&bbs[slot], &box);
         }
     }
 }
@@ -672,6 +608,8 @@ void vs_tile_render(void *arg, int worker, int task)
     t.rxb = t.rxa ? t.rxa + t.bh : NULL;
     t.rey = malloc((size_t)t.bh * 2 * sizeof(float));
     t.rdy = t.rey ? t.rey + t.bh : NULL;
+    t.stride = t.bw + 2 * VS_APRON;
+    t.blk = F->use_blocks ? malloc((size_t)F->blk.ny * 8 * F->blk.nvec * sizeof(float)) : NULL;
     const int npix = t.tw * t.th;
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
     const int nbr = (int)(F->tile_start[task + 1] - F->tile_start[task]);
@@ -733,17 +671,18 @@ void vs_tile_render(void *arg, int worker, int task)
      * holds every sheet a kernel reaches, plus the neighbours central
      * differences read), else sheet-at-a-time with three buffers. */
     const int vspan = (int)ceilf(2.0f * rz / slab) + 1; /* sheets one kernel can reach */
-    const int multi = F->fp.separable && vspan <= 64;
+    const int multi = F->use_blocks;
     const int R = multi ? vspan + 2 : 3;
-    sheets = calloc((size_t)R * ch * t.bw * t.bh, sizeof(float));
+    const size_t sheet_floats = (size_t)ch * t.stride * t.bh;
+    sheets = calloc((size_t)R * sheet_floats, sizeof(float));
     ring = malloc((size_t)R * sizeof *ring);
     bbox = malloc((size_t)R * sizeof *bbox);
-    if (!sheets || !ring || !bbox) {
+    if (!sheets || !ring || !bbox || (multi && !t.blk)) {
         atomic_store(&F->error, 1);
         goto done;
     }
     for (int i = 0; i < R; i++) {
-        ring[i] = sheets + (size_t)i * ch * t.bw * t.bh;
+        ring[i] = sheets + (size_t)i * sheet_floats + (size_t)VS_APRON * ch;
         rect_clear(&bbox[i]);
     }
     const int kbase = kmin - 1; /* slot of sheet k: (k - kbase) % R, never negative */
@@ -791,7 +730,7 @@ void vs_tile_render(void *arg, int worker, int task)
             for (int y = r.y0; y < r.y1; y++)
                 for (int x = r.x0; x < r.x1; x++) {
                     int o = (y - 1) * t.tw + (x - 1);
-                    size_t b = (size_t)y * t.bw + x;
+                    size_t b = (size_t)y * t.stride + x;
                     float a;
                     if (pl == VS_PIPELINE_PRE) {
                         a = q[4 * b + 3];
@@ -799,7 +738,7 @@ void vs_tile_render(void *arg, int worker, int task)
                         a = lookup_corr(F, F->alpha_corr, q[b]);
                         if (a > 0.0f) {
                             sb.g[3 * o + 0] = 0.5f * (q[b + 1] - q[b - 1]);
-                            sb.g[3 * o + 1] = 0.5f * (q[b + t.bw] - q[b - t.bw]);
+                            sb.g[3 * o + 1] = 0.5f * (q[b + t.stride] - q[b - t.stride]);
                             sb.g[3 * o + 2] = (buf[nxt][b] - buf[prev][b]) / (2.0f * slab);
                         }
                     } else if (pl == VS_PIPELINE_POST_GS) {
@@ -820,7 +759,7 @@ void vs_tile_render(void *arg, int worker, int task)
             for (int y = r.y0; y < r.y1; y++)
                 for (int x = r.x0; x < r.x1; x++) {
                     int o = (y - 1) * t.tw + (x - 1);
-                    size_t b = (size_t)y * t.bw + x;
+                    size_t b = (size_t)y * t.stride + x;
                     float a = sb.alpha[o];
                     if (!(a > 0.0f)) continue;
                     float *c = sb.g + 3 * o;
@@ -864,7 +803,7 @@ void vs_tile_render(void *arg, int worker, int task)
         }
         /* retire the sheet no later sheet reads */
         int done_slot = pl == VS_PIPELINE_POST_CD ? prev : cur;
-        clear_rect(ring[done_slot], t.bw, ch, &bbox[done_slot]);
+        clear_rect(ring[done_slot], t.stride, ch, &bbox[done_slot]);
         rect_clear(&bbox[done_slot]);
         if (s->occlusion && opaque >= npix) break; /* tile early termination */
     }
@@ -894,5 +833,6 @@ done:
     free(t.ex);
     free(t.rxa);
     free(t.rey);
+    free(t.blk);
     atomic_fetch_add(&F->tiles_done, 1);
 }

@@ -1,0 +1,78 @@
+/* Footprint blocks: the fast path for separable footprints (isotropic
+ * voxels from any view, anisotropic ones seen along an axis).
+ *
+ * A separable footprint exp(-A dx^2 - C dy^2) is a column weight times a
+ * row weight.  Both depend only on the voxel centre's sub-pixel phase, so
+ * they are tabulated once per frame at VS_BLOCK_PHASES + 1 phases per pixel
+ * and interpolated linearly between them.  (Rounding the phase to the
+ * nearest entry instead is not enough: a pixel sums some 50 voxels whose
+ * weights each err in proportion to the voxel's value, not to the field's
+ * gradient, and central differences of a smooth field then tilt normals by
+ * several degrees — tests/test_splat.c's ramp.)  A voxel builds one block of
+ * weights, `ny` rows of `nvec` 8-float vectors (weights outside the kernel's
+ * radius are exactly 0), and every sheet its kernel reaches adds the block
+ * times a per-sheet weight pattern with one kernel call
+ * (vs_kernels.splat_block) — no per-row set-up, no per-pixel look-ups.
+ *
+ * The pattern repeats every `ch` floats: ch = 1 for density (post-cd),
+ * ch = 4 for interleaved RGBA (pre, post-alpha) or density + gradient
+ * (post-gs, where the block holds h, h dx, h dy, h per pixel). */
+#ifndef VS_BLOCK_H
+#define VS_BLOCK_H
+
+#include "footprint.h"
+
+typedef struct vs_block_geom {
+    int ch;          /* floats per pixel: 1 or 4                              */
+    int grad;        /* block holds h, h dx, h dy, h (gradient splats)        */
+    int nx, ny;      /* pixels a footprint spans at most, across and down     */
+    int nvec;        /* 8-float vectors per block row: ceil(nx ch / 8)        */
+    int bx;          /* pixels per block row: 8 nvec / ch (>= nx)             */
+    float rx0, ry0;  /* footprint half-extents (pixels)                        */
+    float thr;       /* exp(-emax): a product below it lies outside the radius */
+    float *colw;     /* (PHASES + 1) x bx: exp(-A dx^2), 0 past the radius     */
+    float *roww;     /* (PHASES + 1) x ny: exp(-C dy^2), 0 past the radius     */
+} vs_block_geom;
+
+#define VS_BLOCK_PHASES 256
+
+/* Where one voxel's block lands: image column/row of its first pixel and
+ * its phase-table rows. */
+typedef struct vs_block_place {
+    int x, y;        /* image coordinates of block pixel (0, 0)            */
+    float ux, uy;    /* phase: block pixel (0, 0) lies u past the
+                        footprint's left (top) edge, u in [0, 1)           */
+    int qx, qy;      /* table rows below the phases ...                     */
+    float fx, fy;    /* ... and the interpolation weights of the next rows */
+} vs_block_place;
+
+/* Tables for a separable footprint; returns 0 when out of memory. */
+int vs_block_setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad);
+void vs_block_free(vs_block_geom *g);
+
+/* The block of a voxel centred at image position (cx, cy). */
+static inline void vs_block_place_at(const vs_block_geom *g, float cx, float cy, vs_block_place *p)
+{
+    float lx = cx - g->rx0, ly = cy - g->ry0;
+    float ax = ceilf(lx), ay = ceilf(ly);
+    p->x = (int)ax;
+    p->y = (int)ay;
+    p->ux = ax - lx;
+    p->uy = ay - ly;
+    float sx = p->ux * (float)VS_BLOCK_PHASES, sy = p->uy * (float)VS_BLOCK_PHASES;
+    p->qx = (int)sx;
+    p->qy = (int)sy;
+    if (p->qx > VS_BLOCK_PHASES - 1) p->qx = VS_BLOCK_PHASES - 1;
+    if (p->qy > VS_BLOCK_PHASES - 1) p->qy = VS_BLOCK_PHASES - 1;
+    p->fx = sx - (float)p->qx;
+    p->fy = sy - (float)p->qy;
+}
+
+/* Fill rows [j0, j1) and vectors [v0, v1) of the block (row stride
+ * 8 nvec floats). */
+void vs_block_build(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *blk);
+
+/* Most pixels a block row or column may span (vs_block_setup refuses more). */
+#define VS_BLOCK_MAX_SPAN 4096
+
+#endif
