@@ -1,6 +1,7 @@
 /* Footprint blocks into a sheet, AVX-512F: two block vectors per register,
  * an odd last one in a 256-bit register; multiply then add exactly as the
- * scalar reference (src/kernels.c; no FMA, see src/kernels.h). */
+ * scalar reference (src/kernels.c; no FMA, see src/kernels.h).  A one-vector
+ * row stays in a 256-bit register. */
 #include "kernels.h"
 
 #include <immintrin.h>
@@ -9,6 +10,13 @@ void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t
                            const float w8[8])
 {
     const __m256 w = _mm256_loadu_ps(w8);
+    if (nvec == 1) { /* the common 8-pixel density footprint: one ymm a row */
+        for (int r = 0; r < rows; r++) {
+            float *d = dst + r * ds;
+            _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(w, _mm256_loadu_ps(blk + r * bs))));
+        }
+        return;
+    }
     const __m512 w2 = _mm512_insertf32x8(_mm512_castps256_ps512(w), w, 1);
     for (int r = 0; r < rows; r++) {
         float *d = dst + r * ds;
