@@ -11,18 +11,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                           const float w8[8]);
-typedef void (*block_fn)(float *, ptrdiff_t, const float *, ptrdiff_t, int, int, const float *);
 
 typedef struct kernel_entry {
     const char *kernel;
@@ -57,7 +45,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                                                                                          exd + off, w4, n);
                 break;
             case 4:
-                ((block_fn)k->fn)(buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), w8);
+                ((vs_splat_block_fn)k->fn)(buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), w8);
                 break;
             default:
                 if ((r & 1023) == 0) memset(buf, 0, (size_t)(4 * (64 + n)) * sizeof(float));

@@ -8,17 +8,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                           const float w8[8]);
 
 vs_isa vs_isa_from_env(void)
 {

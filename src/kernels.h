@@ -42,6 +42,22 @@ int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n,
 void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                            const float w8[8]);
 
+/* The per-ISA versions in simd/ (declared once here for the dispatch, the
+ * tests and the kernel benchmark; call them only where the CPU has the ISA). */
+void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
+void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
+void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
+typedef void (*vs_splat_block_fn)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                                  const float w8[8]);
+void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8]);
+
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports
  * (simd/dispatch.c). */
 void vs_kernels_init(vs_kernels *k, vs_isa cap);

@@ -11,18 +11,6 @@
 
 #include <string.h>
 
-void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
-typedef void (*block_fn)(float *, ptrdiff_t, const float *, ptrdiff_t, int, int, const float *);
-void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                           const float w8[8]);
 
 typedef void (*row4_fn)(float *, const float *, const float *, int);
 typedef void (*gs_fn)(float *, const float *, const float *, const float *, int);
@@ -72,7 +60,7 @@ static void check_row4(const char *isa, row4_fn fn, int is_gs, gs_fn gfn)
  * block, weight patterns of period 1 (density), 4 (RGBA) and zero; the
  * floats around the block (the rest of each row, the rows between) must
  * not change, and a block of exact zeros must leave the sheet bit-exact. */
-static void check_block(const char *isa, block_fn fn)
+static void check_block(const char *isa, vs_splat_block_fn fn)
 {
     enum { MAXV = 33, MAXR = 9, DS = 8 * MAXV + 13, BS = 8 * MAXV + 5 };
     static float ref[(MAXR + 1) * DS + 8], out[(MAXR + 1) * DS + 8], blk[(MAXR + 1) * BS + 8];
