@@ -74,7 +74,10 @@ typedef struct vs_settings {
     double zoom;               /* largest physical extent spans zoom*width       */
     int has_center;            /* use center[] (voxel coordinates) if non-zero  */
     double center[3];
-    double perspective_fov;    /* reserved: 0 = orthographic (only mode today)   */
+    double perspective_fov;    /* 0 = orthographic (default); else perspective with
+                                  this vertical field of view in degrees (0..170],
+                                  the z = 0 plane through `center` keeping the
+                                  orthographic scale                            */
 
     /* kernel and sheets */
     double slab;               /* sheet thickness Δs in voxel units (default 1) */

@@ -1,4 +1,4 @@
-/* Orthographic camera with the conventions of DESIGN.md §2. */
+/* Orthographic or perspective camera with the conventions of DESIGN.md §2. */
 #include "internal.h"
 
 #include <math.h>
@@ -18,8 +18,10 @@ vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "view angles must be finite");
     if (!(s->zoom > 0.0) || !isfinite(s->zoom) || s->zoom > 1e6)
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "zoom %g must be finite and > 0", s->zoom);
-    if (s->perspective_fov != 0.0)
-        return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "perspective projection is not available in this build");
+    if (!(s->perspective_fov >= 0.0 && s->perspective_fov <= 170.0))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
+                            "perspective field of view %g must lie in [0, 170] degrees (0 = orthographic)",
+                            s->perspective_fov);
     const double deg = M_PI / 180.0;
     double ca = cos(s->azimuth * deg), sa = sin(s->azimuth * deg);
     double ce = cos(s->elevation * deg), se = sin(s->elevation * deg);
@@ -58,6 +60,22 @@ vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
         }
         cam->t[r] = t;
     }
+    cam->cx = off[0];
+    cam->cy = off[1];
+    cam->persp = s->perspective_fov > 0.0;
+    cam->persp_dz = INFINITY;
+    cam->focal_px = INFINITY;
+    cam->near_z = -INFINITY;
+    if (cam->persp) {
+        /* vertical field of view, as VTK's view angle; the eye distance keeps
+         * the z = 0 plane at the orthographic scale, so --zoom means the same
+         * in both projections and a small angle tends to orthographic */
+        cam->focal_px = 0.5 * s->height / tan(0.5 * s->perspective_fov * M_PI / 180.0);
+        cam->persp_dz = cam->focal_px / cam->px_per_mm * cam->z_per_mm;
+        /* nearer than 1/20 of the eye distance, footprints would grow past
+         * 20x their size at the centre: clipped, like a camera's near plane */
+        cam->near_z = -0.95 * cam->persp_dz;
+    }
     /* view -> index: M = D R S with orthonormal R; invert analytically. */
     for (int a = 0; a < 3; a++)
         for (int r = 0; r < 3; r++)
@@ -66,15 +84,42 @@ vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
     return VS_OK;
 }
 
-void vs_camera_index_to_view(const vs_camera *cam, const double idx[3], double v[3])
+void vs_camera_index_to_view0(const vs_camera *cam, const double idx[3], double v[3])
 {
     for (int r = 0; r < 3; r++)
         v[r] = cam->M[r][0] * idx[0] + cam->M[r][1] * idx[1] + cam->M[r][2] * idx[2] + cam->t[r];
 }
 
+void vs_camera_index_to_view(const vs_camera *cam, const double idx[3], double v[3])
+{
+    vs_camera_index_to_view0(cam, idx, v);
+    if (cam->persp) {
+        double sc = vs_camera_scale(cam, v[2]);
+        v[0] = cam->cx + (v[0] - cam->cx) * sc;
+        v[1] = cam->cy + (v[1] - cam->cy) * sc;
+    }
+}
+
 void vs_camera_view_to_index(const vs_camera *cam, const double v[3], double idx[3])
 {
-    double d[3] = {v[0] - cam->t[0], v[1] - cam->t[1], v[2] - cam->t[2]};
+    double x = v[0], y = v[1];
+    if (cam->persp) {
+        double sc = vs_camera_scale(cam, v[2]);
+        x = cam->cx + (x - cam->cx) / sc;
+        y = cam->cy + (y - cam->cy) / sc;
+    }
+    double d[3] = {x - cam->t[0], y - cam->t[1], v[2] - cam->t[2]};
     for (int a = 0; a < 3; a++)
         idx[a] = cam->Minv[a][0] * d[0] + cam->Minv[a][1] * d[1] + cam->Minv[a][2] * d[2];
+}
+
+void vs_camera_ray(const vs_camera *cam, double x, double y, double org[3], double dir[3])
+{
+    const double v0[3] = {x, y, 0.0};
+    vs_camera_view_to_index(cam, v0, org);
+    /* orthographic: along view z; perspective: the pixel's image-plane
+     * offset grows by 1/persp_dz of itself per unit of depth */
+    double dx = cam->persp ? (x - cam->cx) / cam->persp_dz : 0.0;
+    double dy = cam->persp ? (y - cam->cy) / cam->persp_dz : 0.0;
+    for (int a = 0; a < 3; a++) dir[a] = cam->Minv[a][0] * dx + cam->Minv[a][1] * dy + cam->Minv[a][2];
 }

@@ -81,12 +81,69 @@ typedef struct vs_camera {
     double M[3][3], t[3];
     double Minv[3][3];              /* view -> index (for ray casting)        */
     double unit_mm;                 /* one view unit in mm (smallest spacing) */
+    /* Perspective (settings.perspective_fov > 0): the eye sits persp_dz view
+     * units in front of the z = 0 plane (through the image centre's world
+     * point), where the scale is the orthographic one.  A point at depth z
+     * appears scaled by s(z) = persp_dz / (persp_dz + z) about the image
+     * centre; sheets stay planes of constant z, parallel to the image.
+     * Nothing nearer than near_z is drawn.  Orthographic: persp = 0, s = 1,
+     * near_z = -INFINITY. */
+    int persp;
+    double persp_dz;                /* eye distance from z = 0 (view units)   */
+    double focal_px;                /* focal length in pixels                 */
+    double near_z;                  /* near clipping plane (view units)       */
+    double cx, cy;                  /* image centre (pixels)                  */
 } vs_camera;
 
 vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
                           const vs_settings *s, vs_camera *cam);
+/* index -> view: x, y in image pixels (after the perspective divide), z the
+ * depth in view units.  With perspective, only points with z >= near_z
+ * project meaningfully. */
 void vs_camera_index_to_view(const vs_camera *cam, const double idx[3], double v[3]);
 void vs_camera_view_to_index(const vs_camera *cam, const double v[3], double idx[3]);
+/* index -> view before the perspective divide: x, y are where the point
+ * would appear at depth 0 (its image position when orthographic). */
+void vs_camera_index_to_view0(const vs_camera *cam, const double idx[3], double v[3]);
+/* Image scale at depth z relative to z = 0 (1 for orthographic). */
+static inline double vs_camera_scale(const vs_camera *cam, double z)
+{
+    return cam->persp ? cam->persp_dz / (cam->persp_dz + z) : 1.0;
+}
+/* The image box (x0, x1, y0, y1) covered by points whose depth-0 position
+ * lies in [xo0, xo1] x [yo0, yo1] at depths in [z0, z1] (z0 >= near_z). */
+static inline void vs_camera_depth_box(const vs_camera *cam, double xo0, double xo1, double yo0, double yo1,
+                                       double z0, double z1, double box[4])
+{
+    box[0] = xo0, box[1] = xo1, box[2] = yo0, box[3] = yo1;
+    if (!cam->persp) return;
+    /* linear in the position for a fixed scale and in the scale for a fixed
+     * position: the extremes lie at the corners */
+    const double sn = vs_camera_scale(cam, z0), sf = vs_camera_scale(cam, z1);
+    const double c[2] = {cam->cx, cam->cy}, lo[2] = {xo0, yo0}, hi[2] = {xo1, yo1};
+    for (int a = 0; a < 2; a++) {
+        double p[4] = {c[a] + (lo[a] - c[a]) * sn, c[a] + (lo[a] - c[a]) * sf, c[a] + (hi[a] - c[a]) * sn,
+                       c[a] + (hi[a] - c[a]) * sf};
+        double mn = p[0], mx = p[0];
+        for (int i = 1; i < 4; i++) {
+            if (p[i] < mn) mn = p[i];
+            if (p[i] > mx) mx = p[i];
+        }
+        box[2 * a] = mn;
+        box[2 * a + 1] = mx;
+    }
+}
+/* The ray through image pixel (x, y) in index space: the point at depth z is
+ * org + z dir. */
+void vs_camera_ray(const vs_camera *cam, double x, double y, double org[3], double dir[3]);
+/* Perspective: length of the ray through pixel (x, y) per unit of depth
+ * (1 for orthographic), for opacity correction. */
+static inline double vs_camera_ray_length(const vs_camera *cam, double x, double y)
+{
+    if (!cam->persp) return 1.0;
+    double u = (x - cam->cx) / cam->focal_px, v = (y - cam->cy) / cam->focal_px;
+    return sqrt(1.0 + u * u + v * v);
+}
 
 /* ---- classification (transfer function) ---- */
 #define VS_TF_TABLE 4096

@@ -1,13 +1,14 @@
 /* Reference ray caster: post-classified, Phong-shaded with the same light and
- * material model as the splatting pipelines, one orthographic ray per pixel
- * along +z of view space.  Three reconstructions:
+ * material model as the splatting pipelines, one ray per pixel along +z of
+ * view space (parallel rays, or rays from the eye with perspective).  Three reconstructions:
  *   analytic  - the scene's closed form, iso crossings refined by bisection
  *               (ground truth for error measurements);
  *   gaussian  - the exact sum of the splatting kernel b 2^(-2 r^2) over the
  *               voxels within radius R, with its analytic derivative;
  *   trilinear - for comparison, with central-difference gradients.
- * Samples lie on a global grid z = k * ray_step (view units), so neighbouring
- * rays sample consistently.  Rows are spread over plain pthreads; each pixel
+ * Samples lie on a global grid z = k * ray_step (view units: planes parallel
+ * to the image, like the splatting sheets), so neighbouring rays sample
+ * consistently.  Rows are spread over plain pthreads; each pixel
  * is computed independently, so the image is identical for any thread count. */
 #include "finish.h"
 #include "internal.h"
@@ -29,8 +30,6 @@ typedef struct rc_job {
     int mode;
     double R, R2, b;       /* kernel radius, its square, normalization      */
     double step;           /* view units                                    */
-    double dir[3];         /* index units per view unit along the ray       */
-    double dir_len;        /* |dir|: index units per view unit              */
     double box_lo[3], box_hi[3]; /* index box where samples are taken      */
     int refine;            /* bisect iso crossings (analytic, iso-range)    */
     /* empty-space skipping: brick b covers points [org + B b, org + B (b+1)) */
@@ -199,14 +198,18 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
     const vs_settings *s = J->s;
     const vs_camera *cam = &J->cam;
     acc[0] = acc[1] = acc[2] = acc[3] = 0.0;
-    const double v0[3] = {px, py, 0.0};
-    double p0[3];
-    vs_camera_view_to_index(cam, v0, p0);
+    /* the pixel's ray: index point p0 + z dir at view depth z (one direction
+     * for every pixel when orthographic, diverging when perspective) */
+    double p0[3], dir[3];
+    vs_camera_ray(cam, px, py, p0, dir);
+    const double dir_len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    /* opacity per step: the ray's length per unit of depth */
+    const double step_len = J->step * vs_camera_ray_length(cam, px, py);
     /* clip the ray against the sample box (slab test), in view-z units */
-    double t0 = -INFINITY, t1 = INFINITY;
+    double t0 = cam->near_z, t1 = INFINITY;
     int entry_axis = -1;
     for (int a = 0; a < 3; a++) {
-        double d = J->dir[a];
+        double d = dir[a];
         if (fabs(d) < 1e-15) {
             if (p0[a] < J->box_lo[a] || p0[a] > J->box_hi[a]) return;
             continue;
@@ -232,7 +235,7 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
     if (J->refine && entry_axis >= 0) {
         /* The analytic domain ends at the volume's faces: a ray entering it
          * inside the iso-range sees a cut wall, shaded with the face normal. */
-        for (int a = 0; a < 3; a++) pe[a] = p0[a] + t0 * J->dir[a];
+        for (int a = 0; a < 3; a++) pe[a] = p0[a] + t0 * dir[a];
         prev_in = in_iso_range(J->cls, sample_value(J, pe));
         have_prev = 1;
         z_prev = t0;
@@ -240,7 +243,7 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
     }
     for (long k = k0; k <= k1; k++) {
         double z = k * J->step;
-        double p[3] = {p0[0] + z * J->dir[0], p0[1] + z * J->dir[1], p0[2] + z * J->dir[2]};
+        double p[3] = {p0[0] + z * dir[0], p0[1] + z * dir[1], p0[2] + z * dir[2]};
         if (J->skip) {
             int b[3];
             for (int a = 0; a < 3; a++) {
@@ -252,7 +255,7 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
                 /* jump to the first grid sample past the brick's exit */
                 double texit = INFINITY;
                 for (int a = 0; a < 3; a++) {
-                    double d = J->dir[a];
+                    double d = dir[a];
                     if (fabs(d) < 1e-15) continue;
                     double plane = J->org + BRICK * (b[a] + (d > 0 ? 1 : 0));
                     double t = (plane - p0[a]) / d;
@@ -273,15 +276,15 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
             /* The iso crossing lies in (z_prev, z]: bisect to 1e-4 voxel and
              * shade there, so the normal is that of the true surface. */
             double za = z_prev, zb = z;
-            while ((zb - za) * J->dir_len > 1e-4) {
+            while ((zb - za) * dir_len > 1e-4) {
                 double zm = 0.5 * (za + zb);
-                double pm[3] = {p0[0] + zm * J->dir[0], p0[1] + zm * J->dir[1], p0[2] + zm * J->dir[2]};
+                double pm[3] = {p0[0] + zm * dir[0], p0[1] + zm * dir[1], p0[2] + zm * dir[2]};
                 if (in_iso_range(J->cls, sample_value(J, pm)))
                     zb = zm;
                 else
                     za = zm;
             }
-            for (int a = 0; a < 3; a++) ps[a] = p0[a] + zb * J->dir[a];
+            for (int a = 0; a < 3; a++) ps[a] = p0[a] + zb * dir[a];
         }
         have_prev = 1;
         prev_in = in;
@@ -289,11 +292,11 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
         int at_wall = wall;
         wall = 0;
         if (!(alpha > 0.0f)) continue;
-        double op = vs_opacity_correct(alpha, J->step);
+        double op = vs_opacity_correct(alpha, step_len);
         double g[3], gw[3], n[3], diff, spec;
         if (at_wall) { /* inward face normal: into the dense region */
             g[0] = g[1] = g[2] = 0.0;
-            g[entry_axis] = J->dir[entry_axis] > 0 ? 1.0 : -1.0;
+            g[entry_axis] = dir[entry_axis] > 0 ? 1.0 : -1.0;
         } else {
             sample_gradient(J, ps, g);
         }
@@ -705,7 +708,6 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
     J->step = s->ray_step;
     J->refine = J->mode == MODE_ANALYTIC && !cls->use_points;
     for (int a = 0; a < 3; a++) {
-        J->dir[a] = J->cam.Minv[a][2]; /* d index / d view-z */
         /* Sampled data reaches R beyond the outer voxels.  An analytic
          * function is defined everywhere; we cut it where the voxels end
          * (half a voxel beyond the outer ones, like the cube's edge) so that
@@ -714,7 +716,6 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         J->box_lo[a] = -ext;
         J->box_hi[a] = vol->dims[a] - 1 + ext;
     }
-    J->dir_len = sqrt(J->dir[0] * J->dir[0] + J->dir[1] * J->dir[1] + J->dir[2] * J->dir[2]);
     int nthreads = s->threads == 0 ? 2 : s->threads;
     if (nthreads > 256) nthreads = 256;
     if (nthreads > J->cam.height) nthreads = J->cam.height;

@@ -17,18 +17,19 @@ typedef struct bin_job {
 } bin_job;
 
 /* Tiles that a box of voxel centres [x0,x1] x [y0,y1] can reach with its
- * footprints (and the central-difference seam). */
-static inline int tile_range(const vs_frame *F, float x0, float x1, float y0, float y1, int *tx0, int *tx1,
-                             int *ty0, int *ty1)
+ * footprints (and the central-difference seam), footprints scaled by at
+ * most sc (perspective). */
+static inline int tile_range(const vs_frame *F, float x0, float x1, float y0, float y1, float sc, int *tx0,
+                             int *tx1, int *ty0, int *ty1)
 {
     const int W = F->cam.width, H = F->cam.height;
-    if (!(x1 + F->pad_x >= 0.0f) || !(x0 - F->pad_x <= (float)(W - 1)) || !(y1 + F->pad_y >= 0.0f) ||
-        !(y0 - F->pad_y <= (float)(H - 1)))
+    const float px = (float)F->pad_x * sc, py = (float)F->pad_y * sc;
+    if (!(x1 + px >= 0.0f) || !(x0 - px <= (float)(W - 1)) || !(y1 + py >= 0.0f) || !(y0 - py <= (float)(H - 1)))
         return 0; /* off screen (also rejects NaN) */
-    int a = (int)floorf((x0 - (float)F->pad_x) / (float)F->tile);
-    int b = (int)floorf((x1 + (float)F->pad_x) / (float)F->tile);
-    int c = (int)floorf((y0 - (float)F->pad_y) / (float)F->tile);
-    int d = (int)floorf((y1 + (float)F->pad_y) / (float)F->tile);
+    int a = (int)floorf((x0 - px) / (float)F->tile);
+    int b = (int)floorf((x1 + px) / (float)F->tile);
+    int c = (int)floorf((y0 - py) / (float)F->tile);
+    int d = (int)floorf((y1 + py) / (float)F->tile);
     *tx0 = a < 0 ? 0 : a;
     *tx1 = b >= F->tiles_x ? F->tiles_x - 1 : b;
     *ty0 = c < 0 ? 0 : c;
@@ -47,30 +48,40 @@ static void bin_task(void *arg, int worker, int c)
     for (size_t b = b0; b < b1; b++) {
         struct vs_brick_view *bv = &F->bview[b];
         if (!J->fill) {
-            /* the view-space box of the brick's corner voxel centres */
+            /* the view-space box of the brick's corner voxel centres (the
+             * depth-0 image box when perspective) */
             const vs_brick *br = &F->rel->bricks[b];
             double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
             for (int corner = 0; corner < 8; corner++) {
                 double idx[3] = {corner & 1 ? br->i1 : br->i0, corner & 2 ? br->j1 : br->j0,
                                  corner & 4 ? br->k1 : br->k0},
                        p[3];
-                vs_camera_index_to_view(cam, idx, p);
+                vs_camera_index_to_view0(cam, idx, p);
                 for (int a = 0; a < 3; a++) {
                     if (p[a] < lo[a]) lo[a] = p[a];
                     if (p[a] > hi[a]) hi[a] = p[a];
                 }
             }
+            /* perspective: a section's centre moves with its sheet's depth,
+             * over the depths the kernels reach; voxels whose kernel crosses
+             * the near plane are dropped (src/tile.c), and so is a brick of
+             * only such voxels */
+            const double rz = F->fp.rz, reach = rz + 0.5 * F->fp.slab; /* sheet middles */
+            double zn = lo[2] - reach > cam->near_z ? lo[2] - reach : cam->near_z, box[4];
+            vs_camera_depth_box(cam, lo[0], hi[0], lo[1], hi[1], zn, hi[2] + reach, box);
+            bv->sc = (float)vs_camera_scale(cam, zn);
             /* widen by float rounding so that every voxel centre, computed
              * in the tile, lies inside */
-            bv->x0 = (float)lo[0] - 1e-3f;
-            bv->x1 = (float)hi[0] + 1e-3f;
-            bv->y0 = (float)lo[1] - 1e-3f;
-            bv->y1 = (float)hi[1] + 1e-3f;
+            bv->x0 = (float)box[0] - 1e-3f;
+            bv->x1 = (float)box[1] + 1e-3f;
+            bv->y0 = (float)box[2] - 1e-3f;
+            bv->y1 = (float)box[3] + 1e-3f;
             bv->z0 = (float)lo[2] - 1e-3f;
             bv->z1 = (float)hi[2] + 1e-3f;
+            if (hi[2] - rz < cam->near_z) bv->x0 = bv->x1 = bv->y0 = bv->y1 = NAN;
         }
         int tx0, tx1, ty0, ty1;
-        if (!tile_range(F, bv->x0, bv->x1, bv->y0, bv->y1, &tx0, &tx1, &ty0, &ty1)) continue;
+        if (!tile_range(F, bv->x0, bv->x1, bv->y0, bv->y1, bv->sc, &tx0, &tx1, &ty0, &ty1)) continue;
         for (int ty = ty0; ty <= ty1; ty++)
             for (int tx = tx0; tx <= tx1; tx++) {
                 int t = ty * F->tiles_x + tx;
@@ -172,12 +183,14 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     {
         /* separable footprints go voxel at a time with footprint blocks,
          * when a ring of sheets holds every sheet one kernel reaches and a
-         * block stays small (else the general sheet-at-a-time path) */
+         * block stays small (else the general sheet-at-a-time path, which
+         * also serves perspective, where a footprint's size varies with
+         * its depth) */
         int vspan = (int)ceilf(2.0f * (float)F.fp.rz / (float)F.fp.slab) + 1;
         int ch = s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4;
         double det = (double)F.fp.A * F.fp.C - (double)F.fp.B * F.fp.B;
         double nx = 2.0 * sqrt(F.fp.emax * F.fp.C / det) + 1, ny = 2.0 * sqrt(F.fp.emax * F.fp.A / det) + 1;
-        if (F.fp.separable && vspan <= VS_MAX_VSPAN && nx <= VS_BLOCK_MAX_SPAN && ny <= VS_BLOCK_MAX_SPAN &&
+        if (F.fp.separable && !F.cam.persp && vspan <= VS_MAX_VSPAN && nx <= VS_BLOCK_MAX_SPAN && ny <= VS_BLOCK_MAX_SPAN &&
             nx * ny * ch <= (double)(1 << 20)) {
             if (!vs_block_setup(&F.blk, &F.fp, ch, s->pipeline == VS_PIPELINE_POST_GS)) {
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "footprint blocks: out of memory");

@@ -39,7 +39,10 @@ typedef struct vs_frame {
 
     /* per brick of relevant voxels: view-space bounds of its voxel centres
      * (x, y pixels; z view units), for binning and brick-level culling */
-    struct vs_brick_view { float x0, x1, y0, y1, z0, z1; } *bview;
+    struct vs_brick_view {
+        float x0, x1, y0, y1, z0, z1;
+        float sc; /* largest footprint scale of its voxels (perspective; else 1) */
+    } *bview;
 
     /* tiles */
     int tile, tiles_x, tiles_y, ntiles;

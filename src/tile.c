@@ -32,6 +32,9 @@ typedef struct section {
                        bit-identical weights */
     float D;        /* depth integral over the slab                          */
     float E;        /* exp(-k z1^2) - exp(-k z0^2), for the z gradient splat */
+    float sc, is;   /* footprint scale (perspective; 1 when orthographic) and
+                       its inverse: offsets in pixels times `is` are offsets
+                       in the footprint's units (pixels at depth 0)          */
 } section;
 
 typedef struct tile_ctx {
@@ -51,7 +54,18 @@ typedef struct tile_ctx {
     float ry0;           /* footprint half-height without shift              */
 } tile_ctx;
 
-/* Compute the slab section of voxel at depth z for sheet k; 0 if empty. */
+/* Footprint scale of sheet k: its slab's middle depth (perspective; else 1). */
+static inline float sheet_scale(const vs_frame *F, int k)
+{
+    if (!F->cam.persp) return 1.0f;
+    double z = (k + 0.5) * F->fp.slab;
+    return (float)vs_camera_scale(&F->cam, z > F->cam.near_z ? z : F->cam.near_z);
+}
+
+/* Compute the slab section of voxel at depth z for sheet k; 0 if empty.
+ * (x, y) is the voxel's image position, with perspective its depth-0 one:
+ * the section on sheet k's plane is centred on the same world point, which
+ * appears scaled by the sheet's scale about the image centre. */
 static inline int make_section(const tile_ctx *t, float x, float y, float z, int k, section *sec)
 {
     const vs_footprint *fp = t->fp;
@@ -70,6 +84,14 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     sec->E = e1 - e0;
     sec->cx = x;
     sec->cy = y;
+    sec->sc = sec->is = 1.0f;
+    if (t->F->cam.persp) {
+        const float sk = sheet_scale(t->F, k), cx = (float)t->F->cam.cx, cy = (float)t->F->cam.cy;
+        sec->cx = cx + (x - cx) * sk;
+        sec->cy = cy + (y - cy) * sk;
+        sec->sc = sk;
+        sec->is = 1.0f / sk;
+    }
     if (fp->sheared) { /* centroid of the depth term within the slab */
         float zbar = (e0 - e1) / (2.0f * kap * D);
         /* a centroid lies inside its slab; in a kernel's tail D and e0 - e1
@@ -77,8 +99,8 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
          * throw the footprint outside the tiles it was binned to */
         if (!(zbar >= c0)) zbar = c0;
         if (zbar > c1) zbar = c1;
-        sec->cx += fp->sx * zbar;
-        sec->cy += fp->sy * zbar;
+        sec->cx += fp->sx * zbar * sec->sc;
+        sec->cy += fp->sy * zbar * sec->sc;
     }
     return 1;
 }
@@ -87,7 +109,8 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
  * y + oy, oy = y0 - 1). */
 static inline int rows_of(const tile_ctx *t, const section *sec, int *ya, int *yb)
 {
-    int a = (int)ceilf(sec->cy - t->ry0) - t->oy, b = (int)floorf(sec->cy + t->ry0) - t->oy;
+    const float ry = t->ry0 * sec->sc;
+    int a = (int)ceilf(sec->cy - ry) - t->oy, b = (int)floorf(sec->cy + ry) - t->oy;
     if (a < 0) a = 0;
     if (b > t->bh - 1) b = t->bh - 1;
     *ya = a;
@@ -95,15 +118,16 @@ static inline int rows_of(const tile_ctx *t, const section *sec, int *ya, int *y
     return a <= b;
 }
 
-/* Column range of one footprint row; dx0 = first x minus the row centre. */
+/* Column range of the footprint row dy below its centre (dy in footprint
+ * units); *er is the row's exponent, *cxr its centre in pixels. */
 static inline int cols_of(const tile_ctx *t, const section *sec, float dy, float *er, float *cxr,
                           int *xa, int *xb)
 {
     const vs_footprint *fp = t->fp;
     float e = fp->row_k * dy * dy;
     if (e >= (float)fp->emax) return 0;
-    float hw = sqrtf(((float)fp->emax - e) / fp->A);
-    float c = sec->cx + fp->row_shift * dy;
+    float hw = sqrtf(((float)fp->emax - e) / fp->A) * sec->sc;
+    float c = sec->cx + fp->row_shift * dy * sec->sc;
     int a = (int)ceilf(c - hw) - t->ox, b = (int)floorf(c + hw) - t->ox;
     if (a < 0) a = 0;
     if (b > t->bw - 1) b = t->bw - 1;
@@ -136,10 +160,10 @@ static inline void merge_box(rect *bb, const rect *r)
 static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, int *xb)
 {
     const vs_footprint *fp = t->fp;
-    float dy = (float)(y + t->oy) - sec->cy, er, cxr;
+    float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er, cxr;
     if (!cols_of(t, sec, dy, &er, &cxr, xa, xb)) return 0;
     for (int x = *xa; x <= *xb; x++) {
-        float dx = (float)(x + t->ox) - cxr;
+        float dx = ((float)(x + t->ox) - cxr) * sec->is;
         t->ex[x] = vs_fp_exp(fp, er + fp->A * dx * dx);
     }
     return 1;
@@ -174,7 +198,9 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
 /* Density plus the three gradient splats dH/dx, dH/dy, dH/dz (FH'):
  * grad h = -2 Q v h; in-sheet (Qxx d)_x = A dx_row, (Qxx d)_y = B dx + row_k dy
  * (d relative to the shifted centre); the z part integrates exactly to
- * E - 2 D (Qzx d_x + Qzy d_y).  Layout: q, gx, gy, gz per pixel. */
+ * E - 2 D (Qzx d_x + Qzy d_y).  Layout: q, gx, gy, gz per pixel.  Offsets
+ * are in footprint units, so with perspective the gradient is per pixel at
+ * depth 0 for every voxel, whatever its own scale. */
 static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf, rect *bb)
 {
     const vs_footprint *fp = t->fp;
@@ -184,12 +210,12 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
     float A = fp->A, B = fp->B, rk = fp->row_k;
     float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
     for (int y = ya; y <= yb; y++) {
-        float dy = (float)(y + t->oy) - sec->cy, er, cxr;
+        float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er, cxr;
         int xa, xb;
         if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
         float *row = buf + (size_t)y * t->stride * 4;
         for (int x = xa; x <= xb; x++) {
-            float dx = (float)(x + t->ox) - cxr;
+            float dx = ((float)(x + t->ox) - cxr) * sec->is;
             float h = vs_fp_exp(fp, er + A * dx * dx);
             float dxs = dx + rs * dy; /* x offset from the shifted centre */
             float *p = row + 4 * x;
@@ -233,7 +259,7 @@ static void clear_rect(float *buf, int stride, int ch, const rect *r)
 
 /* A voxel of an expanded brick, from its first sheet to its last. */
 typedef struct pend {
-    float x, y, z; /* view-space centre                            */
+    float x, y, z; /* view-space centre (perspective: x, y at depth 0) */
     uint32_t v;    /* index in the relevant-voxel list              */
     int kl;        /* last sheet (lowered when the voxel is culled) */
     int next;      /* next entry with the same first sheet          */
@@ -293,13 +319,15 @@ static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
     w[3] = (F->pipeline == VS_PIPELINE_PRE ? a : val) * bscale;
 }
 
-/* Is every tile pixel that a footprint centred in [x0,x1] x [y0,y1] (plus
- * the central-difference seam) can reach already opaque? */
-static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1)
+/* Is every tile pixel that a footprint centred in [x0,x1] x [y0,y1] and
+ * scaled by at most sc (plus the central-difference seam) can reach already
+ * opaque? */
+static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1, float sc)
 {
     const vs_frame *F = t->F;
-    int xa = (int)floorf(x0 - (float)F->pad_x) - t->x0, xb = (int)ceilf(x1 + (float)F->pad_x) - t->x0;
-    int ya = (int)floorf(y0 - (float)F->pad_y) - t->y0, yb = (int)ceilf(y1 + (float)F->pad_y) - t->y0;
+    const float px = (float)F->pad_x * sc, py = (float)F->pad_y * sc;
+    int xa = (int)floorf(x0 - px) - t->x0, xb = (int)ceilf(x1 + px) - t->x0;
+    int ya = (int)floorf(y0 - py) - t->y0, yb = (int)ceilf(y1 + py) - t->y0;
     if (xa < 0) xa = 0;
     if (ya < 0) ya = 0;
     if (xb > t->tw - 1) xb = t->tw - 1;
@@ -310,6 +338,20 @@ static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, f
     return sum == (xb - xa + 1) * (yb - ya + 1);
 }
 
+/* Perspective: the image box of a voxel's section centres over the sheets
+ * its kernel reaches (their middle depths lie within half a slab of the
+ * kernel's depth extent), (x, y) its depth-0 position, and the largest
+ * scale. */
+static void voxel_box(const vs_frame *F, float x, float y, float z, float box[4], float *sc)
+{
+    const double reach = F->fp.rz + 0.5 * F->fp.slab;
+    const double zn = z - reach > F->cam.near_z ? z - reach : F->cam.near_z;
+    double b[4];
+    vs_camera_depth_box(&F->cam, x, x, y, y, zn, z + reach, b);
+    for (int i = 0; i < 4; i++) box[i] = (float)b[i];
+    *sc = (float)vs_camera_scale(&F->cam, zn);
+}
+
 /* Open brick b: cull it whole if its footprints can only land on opaque
  * pixels, else project its voxels and bucket those that reach this tile. */
 static void expand_brick(tile_state *ts, uint32_t b, int opening)
@@ -318,7 +360,7 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
     const vs_frame *F = t->F;
     const struct vs_brick_view *bv = &F->bview[b];
     const vs_brick *br = &F->rel->bricks[b];
-    if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, bv->x0, bv->x1, bv->y0, bv->y1)) {
+    if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, bv->x0, bv->x1, bv->y0, bv->y1, bv->sc)) {
         ts->ws->culled += br->count;
         return;
     }
@@ -329,9 +371,15 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
     for (uint32_t v = br->start; v < br->start + br->count; v++) {
         const vs_voxel *vx = &F->rel->voxels[v];
         double idx[3] = {vx->i, vx->j, vx->k}, pv[3];
-        vs_camera_index_to_view(&F->cam, idx, pv);
+        vs_camera_index_to_view0(&F->cam, idx, pv);
         float x = (float)pv[0], y = (float)pv[1], z = (float)pv[2];
-        if (x + px < bx0 || x - px > bx1 || y + py < by0 || y - py > by1) continue; /* not this tile */
+        float box[4] = {x, x, y, y}, sc = 1.0f;
+        if (F->cam.persp) {
+            if (pv[2] - rz < F->cam.near_z) continue; /* the kernel crosses the near plane */
+            voxel_box(F, x, y, z, box, &sc);
+        }
+        if (box[1] + px * sc < bx0 || box[0] - px * sc > bx1 || box[3] + py * sc < by0 || box[2] - py * sc > by1)
+            continue; /* not this tile */
         int kf = (int)floorf((z - rz) / slab), kl = (int)floorf((z + rz) / slab);
         if (kf < opening) kf = opening; /* rounding guard: the brick bound is conservative */
         if (kl > ts->kmax) kl = ts->kmax;
@@ -390,10 +438,14 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
     }
     for (int a = 0; a < ts->nactive; a++) {
         pend *e = &ts->p[ts->active[a]];
-        if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y)) {
-            ts->ws->culled++;
-            e->kl = k - 1; /* dropped at the next update */
-            continue;
+        if (F->s->occlusion && *ts->opaque > 0) {
+            float box[4] = {e->x, e->x, e->y, e->y}, sc = 1.0f;
+            if (F->cam.persp) voxel_box(F, e->x, e->y, e->z, box, &sc);
+            if (box_occluded(t, ts->sat, box[0], box[1], box[2], box[3], sc)) {
+                ts->ws->culled++;
+                e->kl = k - 1; /* dropped at the next update */
+                continue;
+            }
         }
         section sec;
         if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
@@ -446,7 +498,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     const float A = F->fp.A, rk = F->fp.row_k;
     for (int i = ts->head[opening - ts->kmin]; i >= 0; i = ts->p[i].next) {
         const pend *e = &ts->p[i];
-        if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y)) {
+        if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y, 1.0f)) {
             ts->ws->culled++;
             continue;
         }
@@ -469,7 +521,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
         depth_weights(&F->fp, e->z, opening, e->kl, pl == VS_PIPELINE_POST_GS, D, E);
         for (int k = opening; k <= e->kl; k++) {
-            const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f};
+            const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f,
+                                 1.0f, 1.0f};
             if (!(sec.D > 0.0f)) continue;
             ts->ws->splatted++;
             int slot = (k - kbase) % R;
@@ -570,6 +623,47 @@ static void clip_outside(const tile_ctx *t, int k, const rect *r, float *alpha)
             int inside = idx[0] >= -0.5 && idx[0] <= lim[0] && idx[1] >= -0.5 && idx[1] <= lim[1] &&
                          idx[2] >= -0.5 && idx[2] <= lim[2];
             if (!inside) alpha[(y - 1) * t->tw + (x - 1)] = 0.0f;
+        }
+}
+
+/* Perspective, post-cd: sheet k's central differences are per pixel of
+ * that sheet, which lie 1/s_k depth-0 pixels apart, and the difference
+ * across sheets runs along the pixel's ray, not along view z.  With the
+ * world point P = (u Z/f, v Z/f, Z) of pixel offset (u, v) from the image
+ * centre (f the focal length in pixels), dF/dZ at a fixed pixel is
+ * Fx u/f + Fy v/f + Fz; solved for Fz.  Units out as in the orthographic
+ * case: x, y per depth-0 pixel, z per view unit. */
+static void perspective_gradients(const tile_ctx *t, int k, const rect *r, const float *alpha, float *g)
+{
+    const vs_camera *cam = &t->F->cam;
+    const float sk = (float)vs_camera_scale(cam, (k + 0.5) * t->F->fp.slab);
+    const float cz = (float)(cam->px_per_mm / (cam->focal_px * cam->z_per_mm));
+    for (int y = r->y0; y < r->y1; y++) {
+        const float v = (float)((y + t->oy) - cam->cy);
+        for (int x = r->x0; x < r->x1; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            if (!(alpha[o] > 0.0f)) continue;
+            const float u = (float)((x + t->ox) - cam->cx);
+            float *p = g + 3 * o;
+            p[0] *= sk;
+            p[1] *= sk;
+            p[2] -= (p[0] * u + p[1] * v) * cz;
+        }
+    }
+}
+
+/* Perspective: a slab is crossed by the pixel's ray over its thickness
+ * times the ray's length per unit depth, so its opacity grows to
+ * 1 - (1 - a)^len (the ray caster steps the same way). */
+static void perspective_opacity(const tile_ctx *t, const rect *r, float *alpha)
+{
+    const vs_camera *cam = &t->F->cam;
+    for (int y = r->y0; y < r->y1; y++)
+        for (int x = r->x0; x < r->x1; x++) {
+            float *a = alpha + (y - 1) * t->tw + (x - 1);
+            if (!(*a > 0.0f && *a < 1.0f)) continue;
+            const float len = (float)vs_camera_ray_length(cam, x + t->ox, y + t->oy);
+            *a = 1.0f - powf(1.0f - *a, len);
         }
 }
 
@@ -754,6 +848,7 @@ void vs_tile_render(void *arg, int worker, int task)
                     sb.alpha[o] = a;
                 }
             if (F->clip_to_volume) clip_outside(&t, k, &r, sb.alpha);
+            if (F->cam.persp && pl == VS_PIPELINE_POST_CD) perspective_gradients(&t, k, &r, sb.alpha, sb.g);
             double t1 = vs_now_ms();
             /* 2. shading: colour per pixel */
             for (int y = r.y0; y < r.y1; y++)
@@ -785,6 +880,7 @@ void vs_tile_render(void *arg, int worker, int task)
                         c[2] = rgb[2] * d + sp;
                     }
                 }
+            if (F->cam.persp) perspective_opacity(&t, &r, sb.alpha);
             double t2 = vs_now_ms();
             /* 3. front-to-back compositing; the accumulated opacity is the
              * tile's occlusion map */

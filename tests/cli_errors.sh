@@ -84,6 +84,9 @@ expect_fail 1 "--iso nan" render "${SCENE[@]}" --iso nan -o a.png
 expect_fail 1 "--zoom abc" render "${SCENE[@]}" --zoom abc -o a.png
 expect_fail 1 "--zoom 0" render "${SCENE[@]}" --zoom 0 -o a.png
 expect_fail 1 "--zoom 1e999" render "${SCENE[@]}" --zoom 1e999 -o a.png
+expect_fail 1 "--perspective 180" render "${SCENE[@]}" --perspective 180 -o a.png
+expect_fail 1 "--perspective -5" render "${SCENE[@]}" --perspective -5 -o a.png
+expect_fail 1 "--perspective nan" render "${SCENE[@]}" --perspective nan -o a.png
 expect_fail 1 "--ramp -1" render "${SCENE[@]}" --ramp -1 -o a.png
 expect_fail 1 "--opacity 2" render "${SCENE[@]}" --opacity 2 -o a.png
 expect_fail 1 "--threads -1" render "${SCENE[@]}" --threads -1 -o a.png

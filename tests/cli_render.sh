@@ -40,7 +40,7 @@ expect_ok "--help" --help
 expect_out "render" "--help mentions render"
 expect_ok "render --help" render --help
 for opt in --scene --pipeline --iso --ramp --opacity --material --background --tf --size --view \
-    --zoom --center --slab --kernel-radius --footprint-res --seam --threads --isa --no-pin \
+    --zoom --perspective --center --slab --kernel-radius --footprint-res --seam --threads --isa --no-pin \
     --no-occlusion --occlusion-threshold --no-tiles --tile-size --exact-normals --normal-lut \
     --ray-step --trilinear --no-analytic --light --ambient --diffuse --specular --shininess \
     --dims --type --spacing --endian --bits --stats --print-stats -q; do
@@ -88,6 +88,10 @@ expect_ok "render with many options" render "${SCENE[@]}" -q --view 30,20 --zoom
     --opacity 0.9 --material 1,0.8,0.6 --background 0,0,0.2,1 --light 1,1,1 --ambient 0.1 --diffuse 0.8 \
     --specular 0.2 --shininess 30 --threads 2 --isa scalar --no-pin --ray-step 0.2 --trilinear -o opts.png
 expect_file opts.png "render with many options"
+for p in post-cd raycast; do
+    expect_ok "perspective $p" render "${SCENE[@]}" -q --perspective 45 --pipeline $p -o persp-$p.png
+    expect_file persp-$p.png "perspective $p"
+done
 VSPLAT_THREADS=1 VSPLAT_ISA=scalar expect_ok "env defaults" render "${SCENE[@]}" -q --stats env.json -o env.png
 if grep -Eq '"threads": *1\b' env.json; then ok; else bad "VSPLAT_THREADS=1 not used: $(grep threads env.json)"; fi
 

@@ -280,7 +280,10 @@ static void test_render_api(void)
     ADD("azimuth NaN", INV, x->azimuth = NAN);
     ADD("elevation inf", INV, x->elevation = INFINITY);
     ADD("center NaN", INV, (x->has_center = 1, x->center[1] = NAN));
-    ADD("perspective", VS_ERR_UNSUPPORTED, x->perspective_fov = 30);
+    ADD("perspective NaN", INV, x->perspective_fov = NAN);
+    ADD("perspective -1", INV, x->perspective_fov = -1);
+    ADD("perspective 180", INV, x->perspective_fov = 180);
+    ADD("perspective inf", INV, x->perspective_fov = INFINITY);
     ADD("slab 0", INV, x->slab = 0);
     ADD("slab NaN", INV, x->slab = NAN);
     ADD("slab -1", INV, x->slab = -1);

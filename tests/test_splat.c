@@ -330,7 +330,7 @@ static double psnr_rgb(const vs_image *a, const vs_image *b)
     return mse > 0 ? 10.0 * log10(1.0 / mse) : INFINITY;
 }
 
-static void test_against_raycaster(const char *scene, int analytic, int size, double min_post_cd)
+static void test_against_raycaster(const char *scene, int analytic, int size, double fov, double min_post_cd)
 {
     vs_volume *v;
     if (vs_volume_scene(ctx, scene, &v) != VS_OK) {
@@ -345,6 +345,7 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
     s.pipeline = VS_PIPELINE_RAYCAST;
     s.ray_step = 0.05;
     s.ray_analytic = analytic;
+    s.perspective_fov = fov;
     vs_image truth;
     vs_stats st;
     if (!render(v, &s, &truth, &st)) {
@@ -361,8 +362,8 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
             continue;
         }
         psnr[p] = psnr_rgb(&truth, &img);
-        printf("%-7s %-10s PSNR vs %s ray caster %.2f dB\n", scene, vs_pipeline_name((vs_pipeline)p),
-               analytic ? "analytic" : "exact-Gaussian", psnr[p]);
+        printf("%-7s %-10s %s PSNR vs %s ray caster %.2f dB\n", scene, vs_pipeline_name((vs_pipeline)p),
+               fov > 0 ? "perspective" : "orthographic", analytic ? "analytic" : "exact-Gaussian", psnr[p]);
         vs_image_free(&img);
     }
     CHECK(psnr[VS_PIPELINE_POST_CD] >= min_post_cd, "%s post-cd PSNR %.2f < %.1f", scene, psnr[1], min_post_cd);
@@ -371,6 +372,47 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
     CHECK(psnr[VS_PIPELINE_POST_GS] >= psnr[VS_PIPELINE_PRE] + 3.0, "%s post-gs %.2f not clearly above pre %.2f",
           scene, psnr[2], psnr[0]);
     vs_image_free(&truth);
+    vs_volume_release(v);
+}
+
+/* Perspective, close up: the post-cd silhouette of the sphere has the
+ * analytic radius f R / sqrt(D^2 - R^2) (eye distance D, focal length f in
+ * pixels), 10 % larger than the orthographic f R / D. */
+static void test_perspective_silhouette(void)
+{
+    vs_volume *v;
+    if (vs_volume_scene(ctx, "sphere", &v) != VS_OK) {
+        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
+        return;
+    }
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 256;
+    s.zoom = 1.2;
+    s.perspective_fov = 60.0;
+    vs_camera cam;
+    CHECK(vs_camera_setup(ctx, v, &s, &cam) == VS_OK, "camera");
+    const double R = v->analytic.params[3], D = cam.focal_px / cam.px_per_mm;
+    const double expect = cam.focal_px * R / sqrt(D * D - R * R), ortho = R * cam.px_per_mm;
+    const vs_pipeline pls[2] = {VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS};
+    for (int p = 0; p < 2; p++) {
+        s.pipeline = pls[p];
+        vs_image img;
+        vs_stats st;
+        if (!render(v, &s, &img, &st)) {
+            tu_failures++;
+            continue;
+        }
+        size_t area = 0;
+        for (int i = 0; i < s.width * s.height; i++) area += img.rgba[4 * i + 3] > 0.5f;
+        double r = sqrt(area / M_PI);
+        printf("perspective 60 deg %s: silhouette radius %.3f px, analytic %.3f, orthographic %.3f\n",
+               vs_pipeline_name(s.pipeline), r, expect, ortho);
+        CHECK(fabs(r - expect) < 0.75, "%s perspective radius %.3f vs %.3f", vs_pipeline_name(s.pipeline), r,
+              expect);
+        CHECK(!has_nan(&img), "NaN in image");
+        vs_image_free(&img);
+    }
     vs_volume_release(v);
 }
 
@@ -383,11 +425,17 @@ int main(void)
     test_cube_edges();
     test_invariance();
     /* the sphere against its analytic definition */
-    test_against_raycaster("sphere", 1, 256, 30.0);
+    test_against_raycaster("sphere", 1, 256, 0.0, 30.0);
+    /* perspective (30 degrees): footprints scale with depth, section centres
+     * move with their sheet's depth, central differences are corrected for
+     * the diverging rays (measured 42.9 dB post-cd, 41.8 dB post-gs) */
+    test_against_raycaster("sphere", 1, 256, 30.0, 38.0);
+    test_perspective_silhouette();
     /* Marschner-Lobb at 41^3 is under-sampled on purpose; against the ray
      * caster that reconstructs the same samples with the same kernel, what is
      * left is what splatting approximates (slabs, tables, gradients) */
-    test_against_raycaster("ml", 0, 128, 20.0);
+    test_against_raycaster("ml", 0, 128, 0.0, 20.0);
+    test_against_raycaster("ml", 0, 128, 30.0, 20.0);
     vs_context_release(ctx);
     TEST_DONE();
 }

@@ -109,6 +109,10 @@ int main(void)
         s.azimuth = 30;
         s.elevation = 60;
         check_volume("cell", cell, &s);
+        /* perspective: footprints scale and move with depth (general path) */
+        s.perspective_fov = 40.0;
+        check_volume("cell perspective", cell, &s);
+        s.perspective_fov = 0.0;
         vs_volume_release(cell);
     } else {
         CHECK(0, "cell scene: %s", vs_last_error(ctx));

@@ -76,7 +76,7 @@ static int to_doubles(const char *s, int n, double *out)
 
 enum opt_id {
     O_HELP, O_OUTPUT, O_SCENE, O_PIPELINE, O_ISO, O_RAMP, O_OPACITY, O_MATERIAL, O_BACKGROUND,
-    O_TF, O_SIZE, O_VIEW, O_ZOOM, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
+    O_TF, O_SIZE, O_VIEW, O_ZOOM, O_PERSPECTIVE, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_QUIET,
@@ -108,6 +108,7 @@ static const opt_def opt_table[] = {
     {"--size", 1, O_SIZE, 0},
     {"--view", 1, O_VIEW, 0},
     {"--zoom", 1, O_ZOOM, 0},
+    {"--perspective", 1, O_PERSPECTIVE, 0},
     {"--center", 1, O_CENTER, 0},
     {"--slab", 1, O_SLAB, 0},
     {"--kernel-radius", 1, O_KRADIUS, 0},
@@ -326,6 +327,7 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
         s->elevation = t[1];
         return 0;
     case O_ZOOM: return parse_range_double(n, v, 0.0, 1000.0, 1, &s->zoom, err, cap);
+    case O_PERSPECTIVE: return parse_range_double(n, v, 0.0, 170.0, 0, &s->perspective_fov, err, cap);
     case O_CENTER:
         if (!to_doubles(v, 3, t)) return fail(err, cap, "--center: expected X,Y,Z (voxel coordinates), got '%s'", v);
         s->has_center = 1;
@@ -564,6 +566,8 @@ void cli_render_usage(FILE *f)
             "  --size WxH             image size (default 512x512)\n"
             "  --view AZ,EL           azimuth, elevation in degrees (default 0,0)\n"
             "  --zoom Z               largest extent spans Z of the image width (default 0.8)\n"
+            "  --perspective FOV      perspective camera, vertical field of view in degrees, 0..170\n"
+            "                         (default 0: orthographic); the centre plane keeps --zoom's scale\n"
             "  --center X,Y,Z         image centre in voxel coordinates (default: volume centre)\n"
             "  --turntable N          N frames, azimuth stepping 360/N from --view: OUT_0000.ext ...,\n"
             "                         or one animated GIF if OUT ends in .gif\n"
