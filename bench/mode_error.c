@@ -2,7 +2,7 @@
  * pipeline x sheet thickness x exact/LUT normals x footprint-table resolution
  * is timed (interleaved runs, median) and compared with a reference ray
  * caster: the scene's analytic function for sphere, ml and cube (ray step
- * 0.05, iso crossing refined), and for Colin27 the same samples
+ * 0.05, iso crossing refined; the sphere also in perspective), and for Colin27 the same samples
  * reconstructed with the exact Gaussian (ray step 0.05).  RMSE, PSNR and SSIM
  * come from vs_image_compare (all four channels); for the cube also the
  * silhouette edge width (10-90 % of alpha, as tests/test_splat.c).  A row is
@@ -23,14 +23,17 @@ typedef struct err_scene {
     int has_iso;
     double iso, ramp;
     int edge; /* measure the cube's silhouette edge width */
+    double fov; /* perspective field of view (0: orthographic) */
 } err_scene;
 
 static const err_scene scenes[] = {
-    {"sphere", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0},
-    {"ml", "scene:ml", 1, 256, 128, 20, 15, 0, 0, 0, 0},
+    {"sphere", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0, 0.0},
+    {"ml", "scene:ml", 1, 256, 128, 20, 15, 0, 0, 0, 0, 0.0},
     /* view 0,0 as tests/test_splat.c: the right silhouette crosses the middle row */
-    {"cube", "scene:cube", 1, 256, 128, 0, 0, 0, 0, 0, 1},
-    {"colin27", "colin27", 0, 128, 64, 180, 0, 1, 45, 10, 0},
+    {"cube", "scene:cube", 1, 256, 128, 0, 0, 0, 0, 0, 1, 0.0},
+    {"colin27", "colin27", 0, 128, 64, 180, 0, 1, 45, 10, 0, 0.0},
+    /* perspective, against the ray caster casting from the eye */
+    {"sphere-persp30", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0, 30.0},
 };
 #define NSCENES ((int)(sizeof scenes / sizeof scenes[0]))
 
@@ -131,6 +134,7 @@ int bench_error(const bench_opts *o)
         base.width = base.height = size;
         base.azimuth = sc->az;
         base.elevation = sc->el;
+        base.perspective_fov = sc->fov;
         base.threads = o->threads;
         if (sc->has_iso) {
             base.has_iso = 1;
@@ -243,14 +247,14 @@ int bench_error(const bench_opts *o)
                            "%s"
                            "set output 'error_vs_time.png'\n"
                            "set datafile separator ','\n"
-                           "set multiplot layout 2,2 title \"vsplat: PSNR against the reference ray caster vs "
+                           "set multiplot layout 2,3 title \"vsplat: PSNR against the reference ray caster vs "
                            "frame time (* = Pareto front)\"\n"
                            "set logscale x\n"
                            "set xlabel 'ms (log)'\n"
                            "set ylabel 'PSNR dB'\n"
                            "set grid\n"
                            "set key bottom right font ',8'\n",
-                           bench_plot_terminal(1100, 800));
+                           bench_plot_terminal(1500, 800));
         static const char *pl[4] = {"pre", "post-cd", "post-gs", "post-alpha"};
         static const int pt[4] = {5, 7, 9, 13};
         for (int si = 0; si < NSCENES && len < (int)sizeof script; si++) {
