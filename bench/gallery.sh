@@ -18,6 +18,9 @@ if [[ -d $DATA ]]; then
     C=$DATA/colin27_ch2_mri_t1_head_181x217x181_u8.nii.gz
     "$V" render "$C" --iso 45 --ramp 10 --view 200,10 --pipeline pre "${S[@]}" -q -o "$OUT/head-skin-pre.png"
     "$V" render "$C" --iso 45 --ramp 10 --view 200,10 --pipeline post-cd "${S[@]}" -q -o "$OUT/head-skin-post-cd.png"
+    # perspective (45 degrees): the near side looms larger than the far one
+    "$V" render "$C" --iso 45 --ramp 10 --view 235,-5 --zoom 0.7 --perspective 45 --pipeline post-cd "${S[@]}" -q \
+        -o "$OUT/head-perspective-post-cd.png"
     "$V" render "$DATA/unc_mrbrain_volpack_brainsmall_128x128x84_u8.den" --spacing 1,1,1.3 --iso 70 --ramp 8 \
         --view 200,20 --pipeline post-gs "${S[@]}" -q -o "$OUT/mrbrain-post-gs.png"
     "$V" render "$DATA/invesalius_cranium_ct_head_256x256x108_i16le.raw.gz" --dims 256,256,108 --type i16 \
