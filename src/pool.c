@@ -22,6 +22,8 @@ struct vs_pool {
     int pin_failed;
     hwloc_topology_t topo;
     vs_worker *workers;
+    hwloc_bitmap_t caller_set; /* pinned: the caller's own binding, kept while
+                                  it runs as worker 0 and restored after   */
     pthread_mutex_t lock;
     pthread_cond_t start_cv, done_cv;
     unsigned long generation; /* bumped for each run                      */
@@ -151,8 +153,11 @@ struct vs_pool *vs_pool_create(int threads, int pin)
         p->workers[i].pool = p;
         p->workers[i].index = i;
     }
-    /* worker 0 is the calling thread: it is not bound (we must not move the
-     * caller's thread), the others bind themselves. */
+    /* worker 0 is the calling thread: it is bound to its core only while it
+     * runs tasks (vs_pool_run restores its own binding after), the others
+     * bind themselves for good.  Left unbound, the caller could be scheduled
+     * onto a pinned worker's core, which that worker cannot leave. */
+    if (p->workers[0].cpuset) p->caller_set = hwloc_bitmap_alloc();
     for (int i = 1; i < threads; i++) {
         if (pthread_create(&p->workers[i].thread, NULL, worker_main, &p->workers[i]) != 0) {
             p->nthreads = i; /* run with fewer workers */
@@ -172,6 +177,7 @@ void vs_pool_destroy(struct vs_pool *p)
     for (int i = 1; i < p->nthreads; i++) pthread_join(p->workers[i].thread, NULL);
     for (int i = 0; i < p->nthreads; i++)
         if (p->workers[i].cpuset) hwloc_bitmap_free(p->workers[i].cpuset);
+    if (p->caller_set) hwloc_bitmap_free(p->caller_set);
     pthread_mutex_destroy(&p->lock);
     pthread_cond_destroy(&p->start_cv);
     pthread_cond_destroy(&p->done_cv);
@@ -199,8 +205,17 @@ void vs_pool_run(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg)
     p->generation++;
     pthread_cond_broadcast(&p->start_cv);
     pthread_mutex_unlock(&p->lock);
+    /* pinned: the caller takes worker 0's core for the run, then gets its
+     * own binding back (a failure is a warning, like any binding) */
+    int rebind = 0;
+    if (p->caller_set && hwloc_get_cpubind(p->topo, p->caller_set, HWLOC_CPUBIND_THREAD) == 0) {
+        if (hwloc_set_cpubind(p->topo, p->workers[0].cpuset, HWLOC_CPUBIND_THREAD) == 0) rebind = 1;
+    }
+    int failed = p->caller_set && !rebind;
     run_tasks(p, 0);
+    if (rebind && hwloc_set_cpubind(p->topo, p->caller_set, HWLOC_CPUBIND_THREAD) != 0) failed = 1;
     pthread_mutex_lock(&p->lock);
+    if (failed) p->pin_failed = 1;
     while (p->running > 0) pthread_cond_wait(&p->done_cv, &p->lock);
     pthread_mutex_unlock(&p->lock);
 }

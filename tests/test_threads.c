@@ -7,10 +7,15 @@
  * what the tile sees: at most 1 - threshold per culled contribution, bounded
  * here by 2 (1 - threshold)).  On the real Colin27 head (skipped when the
  * data is absent) and on the synthetic `cell` scene. */
+#ifndef _GNU_SOURCE
+#define _GNU_SOURCE /* pthread_getaffinity_np */
+#endif
 #include "internal.h"
 #include "testutil.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <sched.h>
 
 static vs_context *ctx;
 static int quick; /* VSPLAT_TEST_QUICK: fewer thread counts and tile sizes */
@@ -91,6 +96,29 @@ static void check_volume(const char *name, const vs_volume *v, const vs_settings
     }
 }
 
+/* With pinning, the calling thread runs as worker 0 bound to its core for
+ * the length of each run; afterwards its own CPU set must be back. */
+static void check_caller_binding(const vs_volume *v)
+{
+    cpu_set_t before, after;
+    if (pthread_getaffinity_np(pthread_self(), sizeof before, &before) != 0) {
+        printf("SKIP: caller binding: pthread_getaffinity_np failed\n");
+        return;
+    }
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 64;
+    s.threads = 2;
+    s.pin = 1;
+    vs_image img;
+    if (!render(v, &s, &img)) return;
+    vs_image_free(&img);
+    CHECK(pthread_getaffinity_np(pthread_self(), sizeof after, &after) == 0 && CPU_EQUAL(&before, &after),
+          "the caller's CPU set changed across a pinned render (%d CPUs before, %d after)", CPU_COUNT(&before),
+          CPU_COUNT(&after));
+    printf("caller binding: %d CPUs before and after a pinned 2-thread render\n", CPU_COUNT(&after));
+}
+
 int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 2;
@@ -108,6 +136,7 @@ int main(void)
     if (vs_volume_scene(ctx, "cell:256", &cell) == VS_OK) {
         s.azimuth = 30;
         s.elevation = 60;
+        check_caller_binding(cell);
         check_volume("cell", cell, &s);
         /* perspective: footprints scale and move with depth (general path) */
         s.perspective_fov = 40.0;
