@@ -368,14 +368,29 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
     const float px = (float)F->pad_x, py = (float)F->pad_y;
     const float bx0 = (float)t->ox, bx1 = (float)(t->ox + t->bw - 1);
     const float by0 = (float)t->oy, by1 = (float)(t->oy + t->bh - 1);
+    /* voxel centres from the brick's lowest corner in float: a voxel lies
+     * at most a brick from it, so this is as exact as the float result and,
+     * depending on the brick alone, the same in every tile */
+    float base[3], m[3][3];
+    {
+        const double idx0[3] = {br->i0, br->j0, br->k0};
+        double p0[3];
+        vs_camera_index_to_view0(&F->cam, idx0, p0);
+        for (int r = 0; r < 3; r++) {
+            base[r] = (float)p0[r];
+            for (int a = 0; a < 3; a++) m[r][a] = (float)F->cam.M[r][a];
+        }
+    }
+    const float near_z = (float)F->cam.near_z;
     for (uint32_t v = br->start; v < br->start + br->count; v++) {
         const vs_voxel *vx = &F->rel->voxels[v];
-        double idx[3] = {vx->i, vx->j, vx->k}, pv[3];
-        vs_camera_index_to_view0(&F->cam, idx, pv);
-        float x = (float)pv[0], y = (float)pv[1], z = (float)pv[2];
+        const float di = (float)(vx->i - br->i0), dj = (float)(vx->j - br->j0), dk = (float)(vx->k - br->k0);
+        float x = base[0] + m[0][0] * di + m[0][1] * dj + m[0][2] * dk;
+        float y = base[1] + m[1][0] * di + m[1][1] * dj + m[1][2] * dk;
+        float z = base[2] + m[2][0] * di + m[2][1] * dj + m[2][2] * dk;
         float box[4] = {x, x, y, y}, sc = 1.0f;
         if (F->cam.persp) {
-            if (pv[2] - rz < F->cam.near_z) continue; /* the kernel crosses the near plane */
+            if (z - rz < near_z) continue; /* the kernel crosses the near plane */
             voxel_box(F, x, y, z, box, &sc);
         }
         if (box[1] + px * sc < bx0 || box[0] - px * sc > bx1 || box[3] + py * sc < by0 || box[2] - py * sc > by1)
