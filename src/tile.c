@@ -727,6 +727,18 @@ void vs_tile_render(void *arg, int worker, int task)
             const float *q = buf[cur];
             /* 1. classification + gradients */
             double t0 = vs_now_ms();
+            /* the tables the post-shaded kernels read (a few stores a sheet) */
+            const vs_shade_tabs tabs = {F->cls->vmin, F->cls->scale, F->alpha_corr, &F->cls->color[0][0], 2.0f * slab,
+                                     (float)F->cam.px_per_mm, (float)F->cam.z_per_mm, F->lut.nl, F->lut.lambda_bin,
+                                     F->lut.radius, F->lut.phi_bin, F->lut.diffuse, F->lut.specular};
+            if (pl == VS_PIPELINE_POST_CD) {
+                for (int y = r.y0; y < r.y1; y++) {
+                    int o = (y - 1) * t.tw + (r.x0 - 1);
+                    size_t b = (size_t)y * t.stride + r.x0;
+                    F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, q + b, buf[prev] + b, buf[nxt] + b, t.stride,
+                                        r.x1 - r.x0, &tabs);
+                }
+            } else
             for (int y = r.y0; y < r.y1; y++)
                 for (int x = r.x0; x < r.x1; x++) {
                     int o = (y - 1) * t.tw + (x - 1);
@@ -734,13 +746,6 @@ void vs_tile_render(void *arg, int worker, int task)
                     float a;
                     if (pl == VS_PIPELINE_PRE) {
                         a = q[4 * b + 3];
-                    } else if (pl == VS_PIPELINE_POST_CD) {
-                        a = lookup_corr(F, F->alpha_corr, q[b]);
-                        if (a > 0.0f) {
-                            sb.g[3 * o + 0] = 0.5f * (q[b + 1] - q[b - 1]);
-                            sb.g[3 * o + 1] = 0.5f * (q[b + t.stride] - q[b - t.stride]);
-                            sb.g[3 * o + 2] = (buf[nxt][b] - buf[prev][b]) / (2.0f * slab);
-                        }
                     } else if (pl == VS_PIPELINE_POST_GS) {
                         a = lookup_corr(F, F->alpha_corr, q[4 * b]);
                         if (a > 0.0f) {
@@ -756,6 +761,13 @@ void vs_tile_render(void *arg, int worker, int task)
             if (F->clip_to_volume) clip_outside(&t, k, &r, sb.alpha);
             double t1 = vs_now_ms();
             /* 2. shading: colour per pixel */
+            if ((pl == VS_PIPELINE_POST_CD || pl == VS_PIPELINE_POST_GS) && !s->exact_normals) {
+                for (int y = r.y0; y < r.y1; y++) {
+                    int o = (y - 1) * t.tw + (r.x0 - 1);
+                    size_t b = (size_t)y * t.stride + r.x0;
+                    F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, q + ch * b, ch, r.x1 - r.x0, &tabs);
+                }
+            } else
             for (int y = r.y0; y < r.y1; y++)
                 for (int x = r.x0; x < r.x1; x++) {
                     int o = (y - 1) * t.tw + (x - 1);

@@ -1,0 +1,133 @@
+/* AVX2 versions of the post-shaded per-sheet kernels (src/kernels.h),
+ * 8 pixels a step, bit-identical to src/kernels.c: the table coordinate in
+ * double as the reference, truncation by cvtt, lrintf as cvtps (round to
+ * nearest), one multiply and one add per element, IEEE division.  Tails go
+ * to the scalar reference (pixels are independent). */
+#include "kernels.h"
+
+#include <float.h>
+#include <immintrin.h>
+
+/* x = max((float)((v - vmin) * scale), 0), NaN -> 0 */
+static inline __m256 tab_coord8(__m256 v, __m256d vmin, __m256d scale)
+{
+    __m256d lo = _mm256_cvtps_pd(_mm256_castps256_ps128(v));
+    __m256d hi = _mm256_cvtps_pd(_mm256_extractf128_ps(v, 1));
+    lo = _mm256_mul_pd(_mm256_sub_pd(lo, vmin), scale);
+    hi = _mm256_mul_pd(_mm256_sub_pd(hi, vmin), scale);
+    __m256 x = _mm256_set_m128(_mm256_cvtpd_ps(hi), _mm256_cvtpd_ps(lo));
+    return _mm256_and_ps(x, _mm256_cmp_ps(x, _mm256_setzero_ps(), _CMP_GT_OQ));
+}
+
+/* (x, y, z) per lane -> x0 y0 z0 x1 ... z7 in three vectors */
+static inline void store3(float *p, __m256 x, __m256 y, __m256 z)
+{
+    const __m256i i0 = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
+    const __m256i i1 = _mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5);
+    const __m256i i2 = _mm256_setr_epi32(5, 5, 6, 6, 6, 7, 7, 7);
+    __m256 o0 = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(x, i0), _mm256_permutevar8x32_ps(y, i0), 0x92),
+                                _mm256_permutevar8x32_ps(z, i0), 0x24);
+    __m256 o1 = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(x, i1), _mm256_permutevar8x32_ps(y, i1), 0x24),
+                                _mm256_permutevar8x32_ps(z, i1), 0x49);
+    __m256 o2 = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(x, i2), _mm256_permutevar8x32_ps(y, i2), 0x49),
+                                _mm256_permutevar8x32_ps(z, i2), 0x92);
+    _mm256_storeu_ps(p, o0);
+    _mm256_storeu_ps(p + 8, o1);
+    _mm256_storeu_ps(p + 16, o2);
+}
+
+/* the inverse of store3 */
+static inline void load3(const float *p, __m256 *x, __m256 *y, __m256 *z)
+{
+    __m256 o0 = _mm256_loadu_ps(p), o1 = _mm256_loadu_ps(p + 8), o2 = _mm256_loadu_ps(p + 16);
+    __m256 bx = _mm256_blend_ps(_mm256_blend_ps(o0, o1, 0x92), o2, 0x24);
+    __m256 by = _mm256_blend_ps(_mm256_blend_ps(o0, o1, 0x24), o2, 0x49);
+    __m256 bz = _mm256_blend_ps(_mm256_blend_ps(o0, o1, 0x49), o2, 0x92);
+    *x = _mm256_permutevar8x32_ps(bx, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+    *y = _mm256_permutevar8x32_ps(by, _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+    *z = _mm256_permutevar8x32_ps(bz, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+}
+
+void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                         int n, const vs_shade_tabs *T)
+{
+    const __m256d vmin = _mm256_set1_pd(T->vmin), scale = _mm256_set1_pd(T->scale);
+    const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1)), top_a = _mm256_set1_ps(T->alpha[VS_KTAB - 1]);
+    const __m256 half = _mm256_set1_ps(0.5f), two_slab = _mm256_set1_ps(T->two_slab);
+    const float *tab = T->alpha;
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        __m256 x = tab_coord8(_mm256_loadu_ps(q + i), vmin, scale);
+        __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
+        x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
+        __m256i j = _mm256_cvttps_epi32(x);
+        __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
+        __m256 t0 = _mm256_i32gather_ps(tab, j, 4), t1 = _mm256_i32gather_ps(tab + 1, j, 4);
+        __m256 a = _mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0)));
+        _mm256_storeu_ps(alpha + i, _mm256_blendv_ps(a, top_a, top));
+        __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(_mm256_loadu_ps(q + i + 1), _mm256_loadu_ps(q + i - 1)));
+        __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(_mm256_loadu_ps(q + i + stride), _mm256_loadu_ps(q + i - stride)));
+        __m256 gz = _mm256_div_ps(_mm256_sub_ps(_mm256_loadu_ps(qn + i), _mm256_loadu_ps(qp + i)), two_slab);
+        store3(g + 3 * i, gx, gy, gz);
+    }
+    if (i < n) vs_classify_cd_scalar(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, n - i, T);
+}
+
+void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
+{
+    const __m256 ppm = _mm256_set1_ps(T->ppm), zpm = _mm256_set1_ps(T->zpm), zero = _mm256_setzero_ps();
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m256 fmax = _mm256_set1_ps(FLT_MAX), tiny = _mm256_set1_ps(1e-30f), k127 = _mm256_set1_ps(127.0f);
+    const __m256i zi = _mm256_setzero_si256(), m127 = _mm256_set1_epi32(-127);
+    const __m256i off_lr = _mm256_set1_epi32(127 * 255 + 127), off_p = _mm256_set1_epi32(127 * 181);
+    const __m256i c255 = _mm256_set1_epi32(255), c181 = _mm256_set1_epi32(181), cnl = _mm256_set1_epi32(T->nl);
+    const __m256i lo16 = _mm256_set1_epi32(0xffff), lo8 = _mm256_set1_epi32(0xff);
+    const __m256d vmin = _mm256_set1_pd(T->vmin), scale = _mm256_set1_pd(T->scale);
+    const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
+    const __m256i vidx = _mm256_mullo_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(vstride));
+    const float *col = T->color;
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        __m256 live = _mm256_cmp_ps(_mm256_loadu_ps(alpha + i), zero, _CMP_GT_OQ);
+        if (_mm256_movemask_ps(live) == 0) continue;
+        __m256 g0x, g0y, g0z;
+        load3(g + 3 * i, &g0x, &g0y, &g0z);
+        /* normal LUT (vs_shade_lut_eval) */
+        __m256 gx = _mm256_mul_ps(g0x, ppm), gy = _mm256_mul_ps(g0y, ppm), gz = _mm256_mul_ps(g0z, zpm);
+        __m256 ax = _mm256_and_ps(gx, absmask), ay = _mm256_and_ps(gy, absmask), az = _mm256_and_ps(gz, absmask);
+        __m256 m = _mm256_max_ps(_mm256_max_ps(ax, ay), az); /* NaN lanes are cleared below */
+        __m256 ok = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(ax, fmax, _CMP_LE_OQ), _mm256_cmp_ps(ay, fmax, _CMP_LE_OQ)),
+                                  _mm256_and_ps(_mm256_cmp_ps(az, fmax, _CMP_LE_OQ), _mm256_cmp_ps(m, tiny, _CMP_GE_OQ)));
+        __m256 k = _mm256_div_ps(k127, _mm256_blendv_ps(k127, m, ok)); /* no division by 0 or NaN */
+        __m256i oki = _mm256_castps_si256(ok);
+        __m256i ix = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gx, k)), oki);
+        __m256i iy = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gy, k)), oki);
+        __m256i iz = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gz, k)), oki);
+        __m256i allz = _mm256_cmpeq_epi32(_mm256_or_si256(_mm256_or_si256(ix, iy), iz), zi);
+        iz = _mm256_blendv_epi8(iz, m127, allz); /* zero gradient: faces the eye */
+        __m256i lr = _mm256_add_epi32(_mm256_mullo_epi32(iy, c255), _mm256_add_epi32(ix, off_lr));
+        __m256i li = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->lambda_bin, lr, 2), lo16);
+        __m256i r = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->radius, lr, 1), lo8);
+        __m256i pidx = _mm256_add_epi32(_mm256_mullo_epi32(iz, c181), _mm256_add_epi32(r, off_p));
+        __m256i pi = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->phi_bin, pidx, 2), lo16);
+        __m256i di = _mm256_add_epi32(_mm256_mullo_epi32(pi, cnl), li);
+        __m256 d = _mm256_i32gather_ps(T->diffuse, di, 4), sp = _mm256_i32gather_ps(T->specular, di, 4);
+        /* colour table */
+        __m256 val = vstride == 1 ? _mm256_loadu_ps(v + i) : _mm256_i32gather_ps(v + (ptrdiff_t)i * vstride, vidx, 4);
+        __m256 x = _mm256_min_ps(tab_coord8(val, vmin, scale), top_x);
+        __m256i j = _mm256_cvttps_epi32(x);
+        __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
+        __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
+        __m256i j3 = _mm256_mullo_epi32(_mm256_min_epi32(j, _mm256_set1_epi32(VS_KTAB - 2)), _mm256_set1_epi32(3));
+        __m256 out[3];
+        for (int ch = 0; ch < 3; ch++) {
+            __m256 c0 = _mm256_i32gather_ps(col + ch, j3, 4), c1 = _mm256_i32gather_ps(col + 3 + ch, j3, 4);
+            __m256 rgb = _mm256_add_ps(c0, _mm256_mul_ps(f, _mm256_sub_ps(c1, c0)));
+            rgb = _mm256_blendv_ps(rgb, _mm256_set1_ps(col[3 * (VS_KTAB - 1) + ch]), top);
+            out[ch] = _mm256_add_ps(_mm256_mul_ps(rgb, d), sp);
+        }
+        store3(g + 3 * i, _mm256_blendv_ps(g0x, out[0], live), _mm256_blendv_ps(g0y, out[1], live),
+               _mm256_blendv_ps(g0z, out[2], live));
+    }
+    if (i < n) vs_shade_lut_scalar(g + 3 * i, alpha + i, v + (ptrdiff_t)i * vstride, vstride, n - i, T);
+}
