@@ -48,29 +48,51 @@ static inline void load3(const float *p, __m256 *x, __m256 *y, __m256 *z)
     *z = _mm256_permutevar8x32_ps(bz, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
 }
 
-void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
-                         int n, const vs_shade_tabs *T)
+/* lanes [0, k) set */
+static inline __m256i prefix8(int k)
+{
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(k), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+}
+
+/* 8 pixels, or the first m of them (masked loads and stores: no access
+ * past the span) */
+static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                             int m, const vs_shade_tabs *T)
 {
     const __m256d vmin = _mm256_set1_pd(T->vmin), scale = _mm256_set1_pd(T->scale);
     const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1)), top_a = _mm256_set1_ps(T->alpha[VS_KTAB - 1]);
     const __m256 half = _mm256_set1_ps(0.5f), two_slab = _mm256_set1_ps(T->two_slab);
     const float *tab = T->alpha;
-    int i = 0;
-    for (; i + 8 <= n; i += 8) {
-        __m256 x = tab_coord8(_mm256_loadu_ps(q + i), vmin, scale);
-        __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
-        x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
-        __m256i j = _mm256_cvttps_epi32(x);
-        __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
-        __m256 t0 = _mm256_i32gather_ps(tab, j, 4), t1 = _mm256_i32gather_ps(tab + 1, j, 4);
-        __m256 a = _mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0)));
-        _mm256_storeu_ps(alpha + i, _mm256_blendv_ps(a, top_a, top));
-        __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(_mm256_loadu_ps(q + i + 1), _mm256_loadu_ps(q + i - 1)));
-        __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(_mm256_loadu_ps(q + i + stride), _mm256_loadu_ps(q + i - stride)));
-        __m256 gz = _mm256_div_ps(_mm256_sub_ps(_mm256_loadu_ps(qn + i), _mm256_loadu_ps(qp + i)), two_slab);
-        store3(g + 3 * i, gx, gy, gz);
+    const __m256i in = prefix8(m);
+#define LD(p) (m == 8 ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in))
+    __m256 x = tab_coord8(LD(q), vmin, scale);
+    __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
+    x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
+    __m256i j = _mm256_cvttps_epi32(x);
+    __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
+    __m256 t0 = _mm256_i32gather_ps(tab, j, 4), t1 = _mm256_i32gather_ps(tab + 1, j, 4);
+    __m256 a = _mm256_blendv_ps(_mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0))), top_a, top);
+    __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
+    __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
+    __m256 gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
+#undef LD
+    if (m == 8) {
+        _mm256_storeu_ps(alpha, a);
+        store3(g, gx, gy, gz);
+    } else {
+        float tmp[24];
+        _mm256_maskstore_ps(alpha, in, a);
+        store3(tmp, gx, gy, gz);
+        for (int k = 0; k < 3; k++) _mm256_maskstore_ps(g + 8 * k, prefix8(3 * m - 8 * k), _mm256_loadu_ps(tmp + 8 * k));
     }
-    if (i < n) vs_classify_cd_scalar(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, n - i, T);
+}
+
+void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                         int n, const vs_shade_tabs *T)
+{
+    int i = 0;
+    for (; i + 8 <= n; i += 8) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, 8, T);
+    if (i < n) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, n - i, T);
 }
 
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
