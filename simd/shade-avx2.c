@@ -95,6 +95,12 @@ void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp
     if (i < n) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, n - i, T);
 }
 
+/* Three passes over up to 64 pixels (8 vectors): each table look-up
+ * depends on the one before (gradient -> lambda bin and radius -> phi bin
+ * -> diffuse, specular), and a gather waits for its loads; split into
+ * passes, the gathers of different vectors are independent and overlap. */
+enum { BLK = 64 };
+
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
 {
     const __m256 ppm = _mm256_set1_ps(T->ppm), zpm = _mm256_set1_ps(T->zpm), zero = _mm256_setzero_ps();
@@ -108,48 +114,76 @@ void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride
     const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
     const __m256i vidx = _mm256_mullo_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(vstride));
     const float *col = T->color;
-    int i = 0;
-    for (; i + 8 <= n; i += 8) {
-        __m256 live = _mm256_cmp_ps(_mm256_loadu_ps(alpha + i), zero, _CMP_GT_OQ);
-        if (_mm256_movemask_ps(live) == 0) continue;
-        __m256 g0x, g0y, g0z;
-        load3(g + 3 * i, &g0x, &g0y, &g0z);
-        /* normal LUT (vs_shade_lut_eval) */
-        __m256 gx = _mm256_mul_ps(g0x, ppm), gy = _mm256_mul_ps(g0y, ppm), gz = _mm256_mul_ps(g0z, zpm);
-        __m256 ax = _mm256_and_ps(gx, absmask), ay = _mm256_and_ps(gy, absmask), az = _mm256_and_ps(gz, absmask);
-        __m256 m = _mm256_max_ps(_mm256_max_ps(ax, ay), az); /* NaN lanes are cleared below */
-        __m256 ok = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(ax, fmax, _CMP_LE_OQ), _mm256_cmp_ps(ay, fmax, _CMP_LE_OQ)),
-                                  _mm256_and_ps(_mm256_cmp_ps(az, fmax, _CMP_LE_OQ), _mm256_cmp_ps(m, tiny, _CMP_GE_OQ)));
-        __m256 k = _mm256_div_ps(k127, _mm256_blendv_ps(k127, m, ok)); /* no division by 0 or NaN */
-        __m256i oki = _mm256_castps_si256(ok);
-        __m256i ix = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gx, k)), oki);
-        __m256i iy = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gy, k)), oki);
-        __m256i iz = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gz, k)), oki);
-        __m256i allz = _mm256_cmpeq_epi32(_mm256_or_si256(_mm256_or_si256(ix, iy), iz), zi);
-        iz = _mm256_blendv_epi8(iz, m127, allz); /* zero gradient: faces the eye */
-        __m256i lr = _mm256_add_epi32(_mm256_mullo_epi32(iy, c255), _mm256_add_epi32(ix, off_lr));
-        __m256i li = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->lambda_bin, lr, 2), lo16);
-        __m256i r = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->radius, lr, 1), lo8);
-        __m256i pidx = _mm256_add_epi32(_mm256_mullo_epi32(iz, c181), _mm256_add_epi32(r, off_p));
-        __m256i pi = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->phi_bin, pidx, 2), lo16);
-        __m256i di = _mm256_add_epi32(_mm256_mullo_epi32(pi, cnl), li);
-        __m256 d = _mm256_i32gather_ps(T->diffuse, di, 4), sp = _mm256_i32gather_ps(T->specular, di, 4);
-        /* colour table */
-        __m256 val = vstride == 1 ? _mm256_loadu_ps(v + i) : _mm256_i32gather_ps(v + (ptrdiff_t)i * vstride, vidx, 4);
-        __m256 x = _mm256_min_ps(tab_coord8(val, vmin, scale), top_x);
-        __m256i j = _mm256_cvttps_epi32(x);
-        __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
-        __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
-        __m256i j3 = _mm256_mullo_epi32(_mm256_min_epi32(j, _mm256_set1_epi32(VS_KTAB - 2)), _mm256_set1_epi32(3));
-        __m256 out[3];
-        for (int ch = 0; ch < 3; ch++) {
-            __m256 c0 = _mm256_i32gather_ps(col + ch, j3, 4), c1 = _mm256_i32gather_ps(col + 3 + ch, j3, 4);
-            __m256 rgb = _mm256_add_ps(c0, _mm256_mul_ps(f, _mm256_sub_ps(c1, c0)));
-            rgb = _mm256_blendv_ps(rgb, _mm256_set1_ps(col[3 * (VS_KTAB - 1) + ch]), top);
-            out[ch] = _mm256_add_ps(_mm256_mul_ps(rgb, d), sp);
+    _Alignas(32) int32_t ia[BLK], ib[BLK];
+    int i0 = 0;
+    for (; i0 + 8 <= n; i0 += BLK) {
+        const int nv = (n - i0 < BLK ? n - i0 : BLK) / 8;
+        int live[BLK / 8];
+        /* pass 1: quantised gradient -> lambda bin (ia) and phi index (ib) */
+        for (int c = 0; c < nv; c++) {
+            const int i = i0 + 8 * c;
+            live[c] = _mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(alpha + i), zero, _CMP_GT_OQ));
+            if (!live[c]) continue;
+            __m256 g0x, g0y, g0z;
+            load3(g + 3 * i, &g0x, &g0y, &g0z);
+            __m256 gx = _mm256_mul_ps(g0x, ppm), gy = _mm256_mul_ps(g0y, ppm), gz = _mm256_mul_ps(g0z, zpm);
+            __m256 ax = _mm256_and_ps(gx, absmask), ay = _mm256_and_ps(gy, absmask), az = _mm256_and_ps(gz, absmask);
+            __m256 m = _mm256_max_ps(_mm256_max_ps(ax, ay), az); /* NaN lanes are cleared below */
+            __m256 ok = _mm256_and_ps(
+                _mm256_and_ps(_mm256_cmp_ps(ax, fmax, _CMP_LE_OQ), _mm256_cmp_ps(ay, fmax, _CMP_LE_OQ)),
+                _mm256_and_ps(_mm256_cmp_ps(az, fmax, _CMP_LE_OQ), _mm256_cmp_ps(m, tiny, _CMP_GE_OQ)));
+            __m256 k = _mm256_div_ps(k127, _mm256_blendv_ps(k127, m, ok)); /* no division by 0 or NaN */
+            __m256i oki = _mm256_castps_si256(ok);
+            __m256i ix = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gx, k)), oki);
+            __m256i iy = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gy, k)), oki);
+            __m256i iz = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gz, k)), oki);
+            __m256i allz = _mm256_cmpeq_epi32(_mm256_or_si256(_mm256_or_si256(ix, iy), iz), zi);
+            iz = _mm256_blendv_epi8(iz, m127, allz); /* zero gradient: faces the eye */
+            __m256i lr = _mm256_add_epi32(_mm256_mullo_epi32(iy, c255), _mm256_add_epi32(ix, off_lr));
+            __m256i li = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->lambda_bin, lr, 2), lo16);
+            __m256i r = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->radius, lr, 1), lo8);
+            _mm256_store_si256((__m256i *)(void *)(ia + 8 * c), li);
+            _mm256_store_si256((__m256i *)(void *)(ib + 8 * c),
+                               _mm256_add_epi32(_mm256_mullo_epi32(iz, c181), _mm256_add_epi32(r, off_p)));
         }
-        store3(g + 3 * i, _mm256_blendv_ps(g0x, out[0], live), _mm256_blendv_ps(g0y, out[1], live),
-               _mm256_blendv_ps(g0z, out[2], live));
+        /* pass 2: phi bin -> shading table index (ia) */
+        for (int c = 0; c < nv; c++) {
+            if (!live[c]) continue;
+            __m256i pidx = _mm256_load_si256((const __m256i *)(const void *)(ib + 8 * c));
+            __m256i pi = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->phi_bin, pidx, 2), lo16);
+            __m256i li = _mm256_load_si256((const __m256i *)(const void *)(ia + 8 * c));
+            _mm256_store_si256((__m256i *)(void *)(ia + 8 * c), _mm256_add_epi32(_mm256_mullo_epi32(pi, cnl), li));
+        }
+        /* pass 3: diffuse, specular, colour table; visible pixels only are replaced */
+        for (int c = 0; c < nv; c++) {
+            if (!live[c]) continue;
+            const int i = i0 + 8 * c;
+            __m256i di = _mm256_load_si256((const __m256i *)(const void *)(ia + 8 * c));
+            __m256 d = _mm256_i32gather_ps(T->diffuse, di, 4), sp = _mm256_i32gather_ps(T->specular, di, 4);
+            __m256 val = vstride == 1 ? _mm256_loadu_ps(v + i) : _mm256_i32gather_ps(v + (ptrdiff_t)i * vstride, vidx, 4);
+            __m256 x = _mm256_min_ps(tab_coord8(val, vmin, scale), top_x);
+            __m256i j = _mm256_cvttps_epi32(x);
+            __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
+            __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
+            __m256i j3 = _mm256_mullo_epi32(_mm256_min_epi32(j, _mm256_set1_epi32(VS_KTAB - 2)), _mm256_set1_epi32(3));
+            __m256 out[3];
+            for (int ch = 0; ch < 3; ch++) {
+                __m256 c0 = _mm256_i32gather_ps(col + ch, j3, 4), c1 = _mm256_i32gather_ps(col + 3 + ch, j3, 4);
+                __m256 rgb = _mm256_add_ps(c0, _mm256_mul_ps(f, _mm256_sub_ps(c1, c0)));
+                rgb = _mm256_blendv_ps(rgb, _mm256_set1_ps(col[3 * (VS_KTAB - 1) + ch]), top);
+                out[ch] = _mm256_add_ps(_mm256_mul_ps(rgb, d), sp);
+            }
+            __m256 g0x, g0y, g0z;
+            load3(g + 3 * i, &g0x, &g0y, &g0z);
+            __m256 lv = _mm256_castsi256_ps(
+                _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(live[c]), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)), zi));
+            store3(g + 3 * i, _mm256_blendv_ps(g0x, out[0], lv), _mm256_blendv_ps(g0y, out[1], lv),
+                   _mm256_blendv_ps(g0z, out[2], lv));
+        }
+        if (nv * 8 < BLK) {
+            i0 += nv * 8;
+            break;
+        }
     }
-    if (i < n) vs_shade_lut_scalar(g + 3 * i, alpha + i, v + (ptrdiff_t)i * vstride, vstride, n - i, T);
+    if (i0 < n) vs_shade_lut_scalar(g + 3 * i0, alpha + i0, v + (ptrdiff_t)i0 * vstride, vstride, n - i0, T);
 }
