@@ -156,10 +156,8 @@ int bench_kernels(const bench_opts *o)
         {"splat_block", VS_ISA_AVX512, 4, (void *)vs_splat_block_avx512},
         {"classify_cd", VS_ISA_SCALAR, 5, (void *)vs_classify_cd_scalar},
         {"classify_cd", VS_ISA_AVX2, 5, (void *)vs_classify_cd_avx2},
-        {"classify_cd", VS_ISA_AVX512, 5, (void *)vs_classify_cd_avx512},
         {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
         {"shade_lut", VS_ISA_AVX2, 6, (void *)vs_shade_lut_avx2},
-        {"shade_lut", VS_ISA_AVX512, 6, (void *)vs_shade_lut_avx512},
     };
     const int lengths[] = {9, 64};
     const int nmax = 64 + 64 + 8;

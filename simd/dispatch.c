@@ -49,8 +49,6 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->isa = VS_ISA_AVX512;
         k->splat_row4 = vs_splat_row4_avx512;
         k->splat_block = vs_splat_block_avx512;
-        k->classify_cd = vs_classify_cd_avx512;
-        k->shade_lut = vs_shade_lut_avx512;
     }
 #endif
 }

@@ -292,8 +292,6 @@ int main(void)
     if (best >= VS_ISA_AVX512) {
         check_row4("avx512", vs_splat_row4_avx512, 0, NULL);
         check_block("avx512", vs_splat_block_avx512);
-        check_classify("avx512", vs_classify_cd_avx512, &fx);
-        check_shade("avx512", vs_shade_lut_avx512, &fx);
     } else {
         printf("SKIP: avx512 kernels: this CPU has no AVX-512\n");
     }
