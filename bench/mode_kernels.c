@@ -150,6 +150,7 @@ int bench_kernels(const bench_opts *o)
         {"splat_row_gs", VS_ISA_SSE4, 2, (void *)vs_splat_row_gs_sse4},
         {"splat_row_gs", VS_ISA_AVX2, 2, (void *)vs_splat_row_gs_avx2},
         {"composite", VS_ISA_SCALAR, 3, (void *)vs_composite_scalar},
+        {"composite", VS_ISA_AVX2, 3, (void *)vs_composite_avx2},
         {"splat_block", VS_ISA_SCALAR, 4, (void *)vs_splat_block_scalar},
         {"splat_block", VS_ISA_SSE4, 4, (void *)vs_splat_block_sse4},
         {"splat_block", VS_ISA_AVX2, 4, (void *)vs_splat_block_avx2},

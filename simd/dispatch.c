@@ -44,6 +44,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->splat_block = vs_splat_block_avx2;
         k->classify_cd = vs_classify_cd_avx2;
         k->shade_lut = vs_shade_lut_avx2;
+        k->composite = vs_composite_avx2;
     }
     if (cap >= VS_ISA_AVX512) {
         k->isa = VS_ISA_AVX512;

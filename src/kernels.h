@@ -99,6 +99,8 @@ typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, in
                                 const vs_shade_tabs *T);
 void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                          int n, const vs_shade_tabs *T);
+typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
+int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports

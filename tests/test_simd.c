@@ -231,6 +231,48 @@ static int check_shade(const char *isa, vs_shade_lut_fn fn, const shade_fixture 
     return 1;
 }
 
+/* compositing: accumulators with opacity below, at and above the
+ * threshold and at 1; alpha 0, -0, NaN, 1 and random; colours of hidden
+ * pixels NaN (they must not leak); thresholds 0.5 and 1 */
+static int check_composite(const char *isa, vs_composite_fn fn)
+{
+    float ar[4 * (MAXN + PAD)], ao[4 * (MAXN + PAD)], al[MAXN + PAD], rgb[3 * (MAXN + PAD) + 1];
+    int cases = 0;
+    for (int n = 0; n <= MAXN; n++)
+        for (int off = 0; off < 4; off++)
+            for (int rep = 0; rep < 4; rep++) {
+                const float thr = rep & 1 ? 1.0f : 0.5f;
+                for (int i = 0; i < MAXN + PAD; i++) {
+                    rng_state = rng_state * 1664525u + 1013904223u;
+                    unsigned c = (rng_state >> 24) % 8;
+                    al[i] = c == 0 ? 0.0f : c == 1 ? -0.0f : c == 2 ? NAN : c == 3 ? 1.0f : frand() * 0.5f + 0.5f;
+                    if (rep == 2) al[i] = 0.25f; /* every pixel visible */
+                    for (int k = 0; k < 3; k++) rgb[3 * i + k] = al[i] > 0.0f ? frand() : NAN;
+                    float o = frand() * 0.5f + 0.5f; /* opacity so far, [0, 1) */
+                    if (c == 4) o = 0.5f;
+                    if (c == 5) o = 1.0f;
+                    for (int k = 0; k < 3; k++) ar[4 * i + k] = ao[4 * i + k] = frand();
+                    ar[4 * i + 3] = ao[4 * i + 3] = o;
+                }
+                rgb[3 * (MAXN + PAD)] = 0.0f;
+                int cr = vs_composite_scalar(ar + 4 * off, al + off, rgb + 3 * off, n, thr);
+                int co = fn(ao + 4 * off, al + off, rgb + 3 * off, n, thr);
+                if (cr != co || memcmp(ar, ao, sizeof ar) != 0) {
+                    if (isa) CHECK(0, "composite %s differs from scalar at n=%d offset=%d rep %d (crossed %d vs %d)", isa, n, off, rep, cr, co);
+                    return 0;
+                }
+                cases++;
+            }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "composite", isa, cases);
+    return 1;
+}
+
+static int composite_off(float *acc, const float *alpha, const float *rgb, int n, float thr)
+{
+    int c = vs_composite_scalar(acc, alpha, rgb, n, thr);
+    return n > 5 ? c + (alpha[5] > 0.0f) : c;
+}
+
 /* The checks must be able to fail: versions off by one ulp in one pixel */
 static void classify_off(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                          int n, const vs_shade_tabs *T)
@@ -273,6 +315,7 @@ int main(void)
     fixture_init(&fx);
     CHECK(!check_classify(NULL, classify_off, &fx), "check_classify cannot tell a wrong kernel from the reference");
     CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
+    CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
@@ -286,6 +329,7 @@ int main(void)
         check_block("avx2", vs_splat_block_avx2);
         check_classify("avx2", vs_classify_cd_avx2, &fx);
         check_shade("avx2", vs_shade_lut_avx2, &fx);
+        check_composite("avx2", vs_composite_avx2);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
