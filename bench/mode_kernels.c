@@ -15,7 +15,7 @@
 typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
-    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut */
+    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs */
     void *fn;
 } kernel_entry;
 
@@ -65,8 +65,10 @@ static void shade_bench_init(shade_bench *B)
     }
     for (int i = 0; i < 255 * 181; i++) B->phi_bin[i] = (uint16_t)(RND() * SHADE_NP);
 #undef RND
-    B->T = (vs_shade_tabs){0.0, 4095.0 / 100.0, B->atab, B->color, 1.0f, 1.0f, 1.0f, SHADE_NL,
-                           B->lambda_bin, B->radius, B->phi_bin, B->diffuse, B->specular};
+    B->T = (vs_shade_tabs){.vmin = 0.0, .scale = 4095.0 / 100.0, .alpha = B->atab, .color = B->color,
+                           .slab = 0.5f, .two_slab = 1.0f, .ppm = 1.0f, .zpm = 1.0f, .nl = SHADE_NL,
+                           .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,
+                           .diffuse = B->diffuse, .specular = B->specular};
 }
 
 /* Time `reps` calls over a buffer of rows; returns ns per element. */
@@ -101,6 +103,10 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                  * dominate); the values stay in range either way */
                 if ((r & 1023) == 0) memcpy(B->g, B->g0, sizeof B->g);
                 ((vs_shade_lut_fn)k->fn)(B->g + 3 * off, B->alpha + off, B->q + off, 1, n, &B->T);
+                break;
+            case 7:
+                /* the sheet rows as (density, gx, gy, gz) pixels */
+                ((vs_classify_gs_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 4 * off, n, &B->T);
                 break;
             default:
                 if ((r & 1023) == 0) memset(buf, 0, (size_t)(4 * (64 + n)) * sizeof(float));
@@ -157,6 +163,8 @@ int bench_kernels(const bench_opts *o)
         {"splat_block", VS_ISA_AVX512, 4, (void *)vs_splat_block_avx512},
         {"classify_cd", VS_ISA_SCALAR, 5, (void *)vs_classify_cd_scalar},
         {"classify_cd", VS_ISA_AVX2, 5, (void *)vs_classify_cd_avx2},
+        {"classify_gs", VS_ISA_SCALAR, 7, (void *)vs_classify_gs_scalar},
+        {"classify_gs", VS_ISA_AVX2, 7, (void *)vs_classify_gs_avx2},
         {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
         {"shade_lut", VS_ISA_AVX2, 6, (void *)vs_shade_lut_avx2},
     };

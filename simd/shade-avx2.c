@@ -48,6 +48,20 @@ static inline void load3(const float *p, __m256 *x, __m256 *y, __m256 *z)
     *z = _mm256_permutevar8x32_ps(bz, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
 }
 
+/* the opacity table at v (as lookup_alpha in src/kernels.c) */
+static inline __m256 lookup_alpha8(const vs_shade_tabs *T, __m256 v)
+{
+    const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
+    __m256 x = tab_coord8(v, _mm256_set1_pd(T->vmin), _mm256_set1_pd(T->scale));
+    __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
+    x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
+    __m256i j = _mm256_cvttps_epi32(x);
+    __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
+    __m256 t0 = _mm256_i32gather_ps(T->alpha, j, 4), t1 = _mm256_i32gather_ps(T->alpha + 1, j, 4);
+    return _mm256_blendv_ps(_mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0))),
+                            _mm256_set1_ps(T->alpha[VS_KTAB - 1]), top);
+}
+
 /* lanes [0, k) set */
 static inline __m256i prefix8(int k)
 {
@@ -59,19 +73,10 @@ static inline __m256i prefix8(int k)
 static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                              int m, const vs_shade_tabs *T)
 {
-    const __m256d vmin = _mm256_set1_pd(T->vmin), scale = _mm256_set1_pd(T->scale);
-    const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1)), top_a = _mm256_set1_ps(T->alpha[VS_KTAB - 1]);
     const __m256 half = _mm256_set1_ps(0.5f), two_slab = _mm256_set1_ps(T->two_slab);
-    const float *tab = T->alpha;
     const __m256i in = prefix8(m);
 #define LD(p) (m == 8 ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in))
-    __m256 x = tab_coord8(LD(q), vmin, scale);
-    __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
-    x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
-    __m256i j = _mm256_cvttps_epi32(x);
-    __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
-    __m256 t0 = _mm256_i32gather_ps(tab, j, 4), t1 = _mm256_i32gather_ps(tab + 1, j, 4);
-    __m256 a = _mm256_blendv_ps(_mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0))), top_a, top);
+    __m256 a = lookup_alpha8(T, LD(q));
     __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
     __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
     __m256 gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
@@ -100,6 +105,29 @@ void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp
  * -> diffuse, specular), and a gather waits for its loads; split into
  * passes, the gathers of different vectors are independent and overlap. */
 enum { BLK = 64 };
+
+/* post-gs: (density, gx, gy, gz) per pixel, transposed to one vector per
+ * channel (pixel order 0 2 4 6 1 3 5 7, put back by one permute each) */
+void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+{
+    const __m256i back = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    const __m256 slab = _mm256_set1_ps(T->slab);
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        const float *p = q4 + 4 * i;
+        __m256 r0 = _mm256_loadu_ps(p), r1 = _mm256_loadu_ps(p + 8), r2 = _mm256_loadu_ps(p + 16),
+               r3 = _mm256_loadu_ps(p + 24);
+        __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+        __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+        __m256 d = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t0, t2, 0x44), back);
+        __m256 gx = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t0, t2, 0xee), back);
+        __m256 gy = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t1, t3, 0x44), back);
+        __m256 gz = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t1, t3, 0xee), back);
+        _mm256_storeu_ps(alpha + i, lookup_alpha8(T, d));
+        store3(g + 3 * i, _mm256_div_ps(gx, slab), _mm256_div_ps(gy, slab), _mm256_div_ps(gz, slab));
+    }
+    if (i < n) vs_classify_gs_scalar(alpha + i, g + 3 * i, q4 + 4 * i, n - i, T);
+}
 
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
 {

@@ -72,23 +72,34 @@ static inline float tab_coord(const vs_shade_tabs *T, float v)
     return x > 0.0f ? x : 0.0f; /* also NaN */
 }
 
+/* the opacity table at v, interpolated linearly, clamped at its ends */
+static inline float lookup_alpha(const vs_shade_tabs *T, float v)
+{
+    float x = tab_coord(T, v);
+    if (x >= (float)(VS_KTAB - 1)) return T->alpha[VS_KTAB - 1];
+    int j = (int)x;
+    float f = x - (float)j;
+    return T->alpha[j] + f * (T->alpha[j + 1] - T->alpha[j]);
+}
+
 void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
                            ptrdiff_t stride, int n, const vs_shade_tabs *T)
 {
-    const float *tab = T->alpha;
     for (int i = 0; i < n; i++) {
-        float x = tab_coord(T, q[i]), a;
-        if (x >= (float)(VS_KTAB - 1)) {
-            a = tab[VS_KTAB - 1];
-        } else {
-            int j = (int)x;
-            float f = x - (float)j;
-            a = tab[j] + f * (tab[j + 1] - tab[j]);
-        }
-        alpha[i] = a;
+        alpha[i] = lookup_alpha(T, q[i]);
         g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
         g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
         g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
+    }
+}
+
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+{
+    for (int i = 0; i < n; i++) {
+        alpha[i] = lookup_alpha(T, q4[4 * i]);
+        g[3 * i + 0] = q4[4 * i + 1] / T->slab;
+        g[3 * i + 1] = q4[4 * i + 2] / T->slab;
+        g[3 * i + 2] = q4[4 * i + 3] / T->slab;
     }
 }
 

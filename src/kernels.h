@@ -24,7 +24,8 @@ typedef struct vs_shade_tabs {
     double vmin, scale;     /* table coordinate x = (float)((v - vmin) * scale) */
     const float *alpha;     /* [VS_KTAB]: opacity corrected for the slab      */
     const float *color;     /* [VS_KTAB][3]                                   */
-    float two_slab;         /* divisor of the z central difference            */
+    float slab, two_slab;   /* slab thickness (post-gs gradients), and twice it
+                               (divisor of the z central difference)        */
     float ppm, zpm;         /* gradient: view space -> eye frame per mm       */
     int nl;                 /* longitude bins                                 */
     const uint16_t *lambda_bin;
@@ -63,6 +64,10 @@ typedef struct vs_kernels {
      * shaded through the normal LUT (vs_shade_lut_eval) times the colour
      * table at v[i * vstride], plus specular, replaces g[3i..]; other
      * pixels are left alone */
+    /* post-gs step 1 over one span of a sheet of (density, three gradient
+     * splats) per pixel: alpha[i] = opacity table at q4[4i], and for EVERY i
+     * g[3i + c] = q4[4i + 1 + c] / slab */
+    void (*classify_gs)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
     void (*shade_lut)(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 } vs_kernels;
 
@@ -76,6 +81,7 @@ void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t
 
 void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
                            ptrdiff_t stride, int n, const vs_shade_tabs *T);
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
 /* The per-ISA versions in simd/ (declared once here for the dispatch, the
@@ -101,6 +107,8 @@ void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp
                          int n, const vs_shade_tabs *T);
 typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
 int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
+typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports

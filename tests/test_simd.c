@@ -129,8 +129,10 @@ static void fixture_init(shade_fixture *F)
         F->phi_bin[i] = (uint16_t)((rng_state >> 8) % NP);
     }
     /* x = (v + 10) * 4095 / 20: v in [-10, 10] spans the table */
-    F->T = (vs_shade_tabs){-10.0, 4095.0 / 20.0, F->alpha, F->color, 0.75f, 1.3f, 0.9f, NL,
-                           F->lambda_bin, F->radius, F->phi_bin, F->diffuse, F->specular};
+    F->T = (vs_shade_tabs){.vmin = -10.0, .scale = 4095.0 / 20.0, .alpha = F->alpha, .color = F->color,
+                           .slab = 0.375f, .two_slab = 0.75f, .ppm = 1.3f, .zpm = 0.9f, .nl = NL,
+                           .lambda_bin = F->lambda_bin, .radius = F->radius, .phi_bin = F->phi_bin,
+                           .diffuse = F->diffuse, .specular = F->specular};
 }
 
 /* a density: mostly inside the table, plus its ends, beyond them, NaN, +-Inf */
@@ -195,6 +197,33 @@ static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fix
                 cases++;
             }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_cd", isa, cases);
+    return 1;
+}
+
+/* step 1 of post-gs: (density, gradient splats) per pixel; densities as
+ * above, gradient splats with zeros, NaN and Inf */
+static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_fixture *F)
+{
+    float q4[4 * (MAXN + PAD)], ar[MAXN + PAD], ao[MAXN + PAD], gr[3 * (MAXN + PAD)], go[3 * (MAXN + PAD)];
+    int cases = 0;
+    for (int n = 0; n <= MAXN; n++)
+        for (int off = 0; off < 4; off++)
+            for (int rep = 0; rep < 2; rep++) {
+                for (int i = 0; i < MAXN + PAD; i++) {
+                    q4[4 * i] = density();
+                    for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
+                    ar[i] = ao[i] = frand();
+                }
+                for (int i = 0; i < 3 * (MAXN + PAD); i++) gr[i] = go[i] = frand();
+                vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &F->T);
+                fn(ao + off, go + 3 * off, q4 + 4 * off, n, &F->T);
+                if (memcmp(ar, ao, sizeof ar) != 0 || memcmp(gr, go, sizeof gr) != 0) {
+                    if (isa) CHECK(0, "classify_gs %s differs from scalar at n=%d offset=%d rep %d", isa, n, off, rep);
+                    return 0;
+                }
+                cases++;
+            }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_gs", isa, cases);
     return 1;
 }
 
@@ -280,6 +309,11 @@ static void classify_off(float *alpha, float *g, const float *q, const float *qp
     vs_classify_cd_scalar(alpha, g, q, qp, qn, stride, n, T);
     if (n > 5) g[3 * 5 + 2] = nextafterf(g[3 * 5 + 2], INFINITY);
 }
+static void classify_gs_off(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+{
+    vs_classify_gs_scalar(alpha, g, q4, n, T);
+    if (n > 5) alpha[5] = nextafterf(alpha[5], INFINITY);
+}
 static void shade_off(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
 {
     vs_shade_lut_scalar(g, alpha, v, vstride, n, T);
@@ -297,7 +331,7 @@ static void check_dispatch(void)
         CHECK(k.isa == want, "cap %s gave %s, expected %s", vs_isa_name((vs_isa)cap), vs_isa_name(k.isa),
               vs_isa_name(want));
         CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.classify_cd &&
-                  k.shade_lut, "cap %s: empty entry",
+                  k.classify_gs && k.shade_lut, "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
     vs_kernels k;
@@ -314,6 +348,8 @@ int main(void)
     static shade_fixture fx;
     fixture_init(&fx);
     CHECK(!check_classify(NULL, classify_off, &fx), "check_classify cannot tell a wrong kernel from the reference");
+    CHECK(!check_classify_gs(NULL, classify_gs_off, &fx),
+          "check_classify_gs cannot tell a wrong kernel from the reference");
     CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
     CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
@@ -328,6 +364,7 @@ int main(void)
         check_row4("avx2", NULL, 1, vs_splat_row_gs_avx2);
         check_block("avx2", vs_splat_block_avx2);
         check_classify("avx2", vs_classify_cd_avx2, &fx);
+        check_classify_gs("avx2", vs_classify_gs_avx2, &fx);
         check_shade("avx2", vs_shade_lut_avx2, &fx);
         check_composite("avx2", vs_composite_avx2);
     } else {
