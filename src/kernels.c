@@ -63,9 +63,9 @@ void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t
     }
 }
 
-/* Table coordinate of a value, in double as vs_classify_eval's callers
- * always did (the SIMD versions convert to double too, so images did not
- * change when these loops became kernels). */
+/* Table coordinate of a value, in double as the per-pixel look-ups in
+ * src/tile.c always did (the SIMD versions convert to double too, so the
+ * images did not change when those loops became kernels). */
 static inline float tab_coord(const vs_shade_tabs *T, float v)
 {
     float x = (float)((v - T->vmin) * T->scale);

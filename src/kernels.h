@@ -60,14 +60,14 @@ typedef struct vs_kernels {
      *   g[3i..3i+2] = 0.5 (q[i+1] - q[i-1]), 0.5 (q[i+s] - q[i-s]), (qn[i] - qp[i]) / two_slab */
     void (*classify_cd)(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                         int n, const vs_shade_tabs *T);
-    /* step 2 (post-cd, post-gs) where alpha[i] > 0: the gradient g[3i..]
-     * shaded through the normal LUT (vs_shade_lut_eval) times the colour
-     * table at v[i * vstride], plus specular, replaces g[3i..]; other
-     * pixels are left alone */
     /* post-gs step 1 over one span of a sheet of (density, three gradient
      * splats) per pixel: alpha[i] = opacity table at q4[4i], and for EVERY i
      * g[3i + c] = q4[4i + 1 + c] / slab */
     void (*classify_gs)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+    /* step 2 (post-cd, post-gs) where alpha[i] > 0: the gradient g[3i..]
+     * shaded through the normal LUT (vs_shade_lut_eval) times the colour
+     * table at v[i * vstride], plus specular, replaces g[3i..]; other
+     * pixels are left alone */
     void (*shade_lut)(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 } vs_kernels;
 
@@ -99,15 +99,17 @@ void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t b
                          const float w8[8]);
 void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                            const float w8[8]);
+typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
 typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const float *qp, const float *qn,
                                   ptrdiff_t stride, int n, const vs_shade_tabs *T);
+typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
                                 const vs_shade_tabs *T);
+/* post-shaded sheet kernels: AVX2 only (AVX-512 versions were slower in the
+ * frame, simd/README.md) */
+int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
 void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                          int n, const vs_shade_tabs *T);
-typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
-int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
-typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
