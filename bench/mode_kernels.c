@@ -15,7 +15,7 @@
 typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
-    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block */
+    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs */
     void *fn;
 } kernel_entry;
 
@@ -24,9 +24,56 @@ typedef struct kernel_entry {
 enum { BLOCK_ROWS = 8, BLOCK_DS = 200 };
 static int block_nvec(int n) { return n < 8 ? 1 : n / 8; }
 
+/* Post-shaded sheet kernels: a density sheet of 3 rows of SHEET_S floats
+ * (and the sheets before and after) with values across the opacity ramp,
+ * gradients of random direction (pessimistic for the table gathers: on a
+ * real sheet neighbours have similar normals), a third of the pixels
+ * visible, and synthetic tables of the real sizes (nl = 64). */
+enum { SHEET_S = 256, SHADE_NL = 64, SHADE_NP = SHADE_NL / 2 + 1 };
+typedef struct shade_bench {
+    float q[3 * SHEET_S], qp[3 * SHEET_S], qn[3 * SHEET_S], alpha[SHEET_S], g[3 * SHEET_S], g0[3 * SHEET_S];
+    float atab[VS_KTAB], color[3 * VS_KTAB], diffuse[SHADE_NP * SHADE_NL], specular[SHADE_NP * SHADE_NL];
+    uint16_t lambda_bin[255 * 255 + 2], phi_bin[255 * 181 + 2];
+    uint8_t radius[255 * 255 + 4];
+    vs_shade_tabs T;
+} shade_bench;
+
+static void shade_bench_init(shade_bench *B)
+{
+    unsigned st = 12345u;
+#define RND() (st = st * 1664525u + 1013904223u, (float)(st >> 8) / 16777216.0f)
+    for (int i = 0; i < 3 * SHEET_S; i++) {
+        B->q[i] = 40.0f + 20.0f * RND();
+        B->qp[i] = 40.0f + 20.0f * RND();
+        B->qn[i] = 40.0f + 20.0f * RND();
+    }
+    /* a third visible, in runs of 8 (on the head ~26 % of the pixels of a shaded span are) */
+    for (int i = 0; i < SHEET_S; i++) B->alpha[i] = (i % 24) < 8 ? 0.05f : 0.0f;
+    for (int i = 0; i < 3 * SHEET_S; i++) B->g0[i] = RND() * 2.0f - 1.0f;
+    for (int i = 0; i < VS_KTAB; i++) B->atab[i] = i < 2000 ? 0.0f : (float)(i - 2000) / 2095.0f;
+    for (int i = 0; i < 3 * VS_KTAB; i++) B->color[i] = RND();
+    for (int i = 0; i < SHADE_NP * SHADE_NL; i++) {
+        B->diffuse[i] = RND();
+        B->specular[i] = RND();
+    }
+    memset(B->lambda_bin, 0, sizeof B->lambda_bin);
+    memset(B->radius, 0, sizeof B->radius);
+    memset(B->phi_bin, 0, sizeof B->phi_bin);
+    for (int i = 0; i < 255 * 255; i++) {
+        B->lambda_bin[i] = (uint16_t)(RND() * SHADE_NL);
+        B->radius[i] = (uint8_t)(RND() * 181);
+    }
+    for (int i = 0; i < 255 * 181; i++) B->phi_bin[i] = (uint16_t)(RND() * SHADE_NP);
+#undef RND
+    B->T = (vs_shade_tabs){.vmin = 0.0, .scale = 4095.0 / 100.0, .alpha = B->atab, .color = B->color,
+                           .slab = 0.5f, .two_slab = 1.0f, .ppm = 1.0f, .zpm = 1.0f, .nl = SHADE_NL,
+                           .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,
+                           .diffuse = B->diffuse, .specular = B->specular};
+}
+
 /* Time `reps` calls over a buffer of rows; returns ns per element. */
 static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, float *exd, float *alpha, float *rgb,
-                          long reps)
+                          shade_bench *B, long reps)
 {
     const float w4[4] = {0.25f, 0.5f, 0.75f, 1.0f};
     const float w8[8] = {0.25f, 0.5f, 0.75f, 1.0f, 0.25f, 0.5f, 0.75f, 1.0f};
@@ -46,6 +93,20 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 break;
             case 4:
                 ((vs_splat_block_fn)k->fn)(buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), w8);
+                break;
+            case 5:
+                ((vs_classify_cd_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + SHEET_S + 1 + off,
+                                           B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, SHEET_S, n, &B->T);
+                break;
+            case 6:
+                /* shading overwrites the gradients: restore them now and then (a copy per call would
+                 * dominate); the values stay in range either way */
+                if ((r & 1023) == 0) memcpy(B->g, B->g0, sizeof B->g);
+                ((vs_shade_lut_fn)k->fn)(B->g + 3 * off, B->alpha + off, B->q + off, 1, n, &B->T);
+                break;
+            case 7:
+                /* the sheet rows as (density, gx, gy, gz) pixels */
+                ((vs_classify_gs_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 4 * off, n, &B->T);
                 break;
             default:
                 if ((r & 1023) == 0) memset(buf, 0, (size_t)(4 * (64 + n)) * sizeof(float));
@@ -95,10 +156,17 @@ int bench_kernels(const bench_opts *o)
         {"splat_row_gs", VS_ISA_SSE4, 2, (void *)vs_splat_row_gs_sse4},
         {"splat_row_gs", VS_ISA_AVX2, 2, (void *)vs_splat_row_gs_avx2},
         {"composite", VS_ISA_SCALAR, 3, (void *)vs_composite_scalar},
+        {"composite", VS_ISA_AVX2, 3, (void *)vs_composite_avx2},
         {"splat_block", VS_ISA_SCALAR, 4, (void *)vs_splat_block_scalar},
         {"splat_block", VS_ISA_SSE4, 4, (void *)vs_splat_block_sse4},
         {"splat_block", VS_ISA_AVX2, 4, (void *)vs_splat_block_avx2},
         {"splat_block", VS_ISA_AVX512, 4, (void *)vs_splat_block_avx512},
+        {"classify_cd", VS_ISA_SCALAR, 5, (void *)vs_classify_cd_scalar},
+        {"classify_cd", VS_ISA_AVX2, 5, (void *)vs_classify_cd_avx2},
+        {"classify_gs", VS_ISA_SCALAR, 7, (void *)vs_classify_gs_scalar},
+        {"classify_gs", VS_ISA_AVX2, 7, (void *)vs_classify_gs_avx2},
+        {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
+        {"shade_lut", VS_ISA_AVX2, 6, (void *)vs_shade_lut_avx2},
     };
     const int lengths[] = {9, 64};
     const int nmax = 64 + 64 + 8;
@@ -108,7 +176,8 @@ int bench_kernels(const bench_opts *o)
     float *buf = calloc(nbuf, sizeof(float)), *ex = malloc((size_t)8 * nmax * sizeof(float));
     float *exd = malloc((size_t)nmax * sizeof(float)), *alpha = malloc((size_t)nmax * sizeof(float));
     float *rgb = malloc(((size_t)nmax * 3 + 1) * sizeof(float));
-    if (!buf || !ex || !exd || !alpha || !rgb) {
+    shade_bench *B = malloc(sizeof *B);
+    if (!buf || !ex || !exd || !alpha || !rgb || !B) {
         fprintf(stderr, "kernels: out of memory\n");
         return 1;
     }
@@ -119,6 +188,7 @@ int bench_kernels(const bench_opts *o)
         alpha[i] = (i % 3) ? 0.05f : 0.0f;
     }
     for (int i = 0; i < 3 * nmax + 1; i++) rgb[i] = 0.5f;
+    shade_bench_init(B);
     long reps = o->quick ? 200000 : 2000000;
     FILE *csv = bench_results_dir(o) == 0 ? bench_result_open(o, "kernels.csv") : NULL;
     if (csv) fprintf(csv, "kernel,isa,n,ns_per_element,speedup_vs_scalar\n");
@@ -133,7 +203,7 @@ int bench_kernels(const bench_opts *o)
         }
         printf("%-14s %-8s", k->kernel, vs_isa_name(k->isa));
         for (int l = 0; l < 2; l++) {
-            double ns = time_kernel(k, lengths[l], buf, ex, exd, alpha, rgb, reps);
+            double ns = time_kernel(k, lengths[l], buf, ex, exd, alpha, rgb, B, reps);
             if (k->isa == VS_ISA_SCALAR) scalar_ns[l] = ns;
             double sp = scalar_ns[l] > 0 ? scalar_ns[l] / ns : 0;
             printf("   %8.3f    %5.2fx", ns, sp);
@@ -152,6 +222,7 @@ int bench_kernels(const bench_opts *o)
     free(exd);
     free(alpha);
     free(rgb);
+    free(B);
 
     /* the rasterize stage of a real frame per ISA */
     vs_volume *vol = NULL;

@@ -28,6 +28,9 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->splat_row_gs = vs_splat_row_gs_scalar;
     k->composite = vs_composite_scalar;
     k->splat_block = vs_splat_block_scalar;
+    k->classify_cd = vs_classify_cd_scalar;
+    k->classify_gs = vs_classify_gs_scalar;
+    k->shade_lut = vs_shade_lut_scalar;
 #if defined(__x86_64__) || defined(__i386__)
     if (cap >= VS_ISA_SSE4) {
         k->isa = VS_ISA_SSE4;
@@ -40,6 +43,10 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->splat_row4 = vs_splat_row4_avx2;
         k->splat_row_gs = vs_splat_row_gs_avx2;
         k->splat_block = vs_splat_block_avx2;
+        k->classify_cd = vs_classify_cd_avx2;
+        k->classify_gs = vs_classify_gs_avx2;
+        k->shade_lut = vs_shade_lut_avx2;
+        k->composite = vs_composite_avx2;
     }
     if (cap >= VS_ISA_AVX512) {
         k->isa = VS_ISA_AVX512;

@@ -2,6 +2,9 @@
  * against (tests/test_simd.c). */
 #include "kernels.h"
 
+#include <float.h>
+#include <math.h>
+
 void vs_splat_row1_scalar(float *row, const float *ex, float w, int n)
 {
     for (int i = 0; i < n; i++) row[i] += w * ex[i];
@@ -57,5 +60,85 @@ void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t
         float *d = dst + r * ds;
         const float *b = blk + r * bs;
         for (int i = 0; i < 8 * nvec; i++) d[i] += w8[i % 8] * b[i];
+    }
+}
+
+/* Table coordinate of a value, in double as the per-pixel look-ups in
+ * src/tile.c always did (the SIMD versions convert to double too, so the
+ * images did not change when those loops became kernels). */
+static inline float tab_coord(const vs_shade_tabs *T, float v)
+{
+    float x = (float)((v - T->vmin) * T->scale);
+    return x > 0.0f ? x : 0.0f; /* also NaN */
+}
+
+/* the opacity table at v, interpolated linearly, clamped at its ends */
+static inline float lookup_alpha(const vs_shade_tabs *T, float v)
+{
+    float x = tab_coord(T, v);
+    if (x >= (float)(VS_KTAB - 1)) return T->alpha[VS_KTAB - 1];
+    int j = (int)x;
+    float f = x - (float)j;
+    return T->alpha[j] + f * (T->alpha[j + 1] - T->alpha[j]);
+}
+
+void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
+                           ptrdiff_t stride, int n, const vs_shade_tabs *T)
+{
+    for (int i = 0; i < n; i++) {
+        alpha[i] = lookup_alpha(T, q[i]);
+        g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
+        g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
+        g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
+    }
+}
+
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+{
+    for (int i = 0; i < n; i++) {
+        alpha[i] = lookup_alpha(T, q4[4 * i]);
+        g[3 * i + 0] = q4[4 * i + 1] / T->slab;
+        g[3 * i + 1] = q4[4 * i + 2] / T->slab;
+        g[3 * i + 2] = q4[4 * i + 3] / T->slab;
+    }
+}
+
+void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
+{
+    for (int i = 0; i < n; i++) {
+        if (!(alpha[i] > 0.0f)) continue;
+        float *c = g + 3 * i;
+        /* vs_shade_lut_eval (src/normals.h), on the eye-frame gradient */
+        float gx = c[0] * T->ppm, gy = c[1] * T->ppm, gz = c[2] * T->zpm;
+        float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
+        float m = ax > ay ? ax : ay;
+        if (az > m) m = az;
+        if (!(ax <= FLT_MAX && ay <= FLT_MAX && az <= FLT_MAX) || !(m >= 1e-30f)) m = 0.0f;
+        int ix = 0, iy = 0, iz = 0;
+        if (m > 0.0f) {
+            float k = 127.0f / m;
+            ix = (int)lrintf(gx * k);
+            iy = (int)lrintf(gy * k);
+            iz = (int)lrintf(gz * k);
+        }
+        if (ix == 0 && iy == 0 && iz == 0) iz = -127;
+        int li = T->lambda_bin[(iy + 127) * 255 + (ix + 127)];
+        int r = T->radius[(iy + 127) * 255 + (ix + 127)];
+        int pi = T->phi_bin[(iz + 127) * 181 + r];
+        float d = T->diffuse[pi * T->nl + li], sp = T->specular[pi * T->nl + li];
+        /* colour table, clamped at its ends */
+        float x = tab_coord(T, v[(ptrdiff_t)i * vstride]);
+        float rgb[3];
+        if (x >= (float)(VS_KTAB - 1)) {
+            for (int ch = 0; ch < 3; ch++) rgb[ch] = T->color[3 * (VS_KTAB - 1) + ch];
+        } else {
+            int j = (int)x;
+            float f = x - (float)j;
+            for (int ch = 0; ch < 3; ch++)
+                rgb[ch] = T->color[3 * j + ch] + f * (T->color[3 * j + 3 + ch] - T->color[3 * j + ch]);
+        }
+        c[0] = rgb[0] * d + sp;
+        c[1] = rgb[1] * d + sp;
+        c[2] = rgb[2] * d + sp;
     }
 }

@@ -14,6 +14,27 @@
 #include "vsplat.h"
 
 #include <stddef.h>
+#include <stdint.h>
+
+/* Tables of the post-shaded classification and LUT shading (src/normals.h),
+ * gathered per sheet from the frame so the kernels need no internal
+ * headers.  The 8- and 16-bit tables have 4 bytes of padding at the end:
+ * SIMD versions read them with 32-bit gathers and mask. */
+typedef struct vs_shade_tabs {
+    double vmin, scale;     /* table coordinate x = (float)((v - vmin) * scale) */
+    const float *alpha;     /* [VS_KTAB]: opacity corrected for the slab      */
+    const float *color;     /* [VS_KTAB][3]                                   */
+    float slab, two_slab;   /* slab thickness (post-gs gradients), and twice it
+                               (divisor of the z central difference)        */
+    float ppm, zpm;         /* gradient: view space -> eye frame per mm       */
+    int nl;                 /* longitude bins                                 */
+    const uint16_t *lambda_bin;
+    const uint8_t *radius;
+    const uint16_t *phi_bin;
+    const float *diffuse, *specular;
+} vs_shade_tabs;
+/* Entries of the classification tables (VS_TF_TABLE in internal.h). */
+#define VS_KTAB 4096
 
 typedef struct vs_kernels {
     vs_isa isa; /* the ISA cap in force (what the stats report) */
@@ -32,6 +53,22 @@ typedef struct vs_kernels {
      *   dst[r ds + i] += w8[i % 8] * blk[r bs + i], r < rows, i < 8 nvec */
     void (*splat_block)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                         const float w8[8]);
+    /* post-cd step 1 over one span of a density sheet q (neighbour rows at
+     * +-stride, sheets before/after qp, qn): alpha[i] = opacity table at
+     * q[i] (linear interpolation), and for EVERY i (read only where
+     * alpha > 0) the central-difference gradient
+     *   g[3i..3i+2] = 0.5 (q[i+1] - q[i-1]), 0.5 (q[i+s] - q[i-s]), (qn[i] - qp[i]) / two_slab */
+    void (*classify_cd)(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                        int n, const vs_shade_tabs *T);
+    /* post-gs step 1 over one span of a sheet of (density, three gradient
+     * splats) per pixel: alpha[i] = opacity table at q4[4i], and for EVERY i
+     * g[3i + c] = q4[4i + 1 + c] / slab */
+    void (*classify_gs)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+    /* step 2 (post-cd, post-gs) where alpha[i] > 0: the gradient g[3i..]
+     * shaded through the normal LUT (vs_shade_lut_eval) times the colour
+     * table at v[i * vstride], plus specular, replaces g[3i..]; other
+     * pixels are left alone */
+    void (*shade_lut)(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 } vs_kernels;
 
 /* Scalar reference kernels (src/kernels.c). */
@@ -41,6 +78,11 @@ void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, cons
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);
 void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                            const float w8[8]);
+
+void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
+                           ptrdiff_t stride, int n, const vs_shade_tabs *T);
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
 /* The per-ISA versions in simd/ (declared once here for the dispatch, the
  * tests and the kernel benchmark; call them only where the CPU has the ISA). */
@@ -57,6 +99,19 @@ void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t b
                          const float w8[8]);
 void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                            const float w8[8]);
+typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
+typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const float *qp, const float *qn,
+                                  ptrdiff_t stride, int n, const vs_shade_tabs *T);
+typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
+                                const vs_shade_tabs *T);
+/* post-shaded sheet kernels: AVX2 only (AVX-512 versions were slower in the
+ * frame, simd/README.md) */
+int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
+void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                         int n, const vs_shade_tabs *T);
+void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports
  * (simd/dispatch.c). */

@@ -23,9 +23,10 @@ vs_status vs_shade_lut_setup(vs_context *ctx, int nl, const vs_light *light, vs_
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "normal LUT size %d must lie in [8, 4096]", nl);
     lut->nl = nl;
     lut->np = nl / 2 + 1;
-    lut->lambda_bin = malloc(255 * 255 * sizeof *lut->lambda_bin);
-    lut->radius = malloc(255 * 255);
-    lut->phi_bin = malloc(255 * 181 * sizeof *lut->phi_bin);
+    /* 4 bytes of zero padding: SIMD shading reads these with 32-bit gathers */
+    lut->lambda_bin = calloc(255 * 255 + 2, sizeof *lut->lambda_bin);
+    lut->radius = calloc(255 * 255 + 4, 1);
+    lut->phi_bin = calloc(255 * 181 + 2, sizeof *lut->phi_bin);
     lut->diffuse = malloc((size_t)lut->np * nl * sizeof(float));
     lut->specular = malloc((size_t)lut->np * nl * sizeof(float));
     if (!lut->lambda_bin || !lut->radius || !lut->phi_bin || !lut->diffuse || !lut->specular) {

@@ -836,65 +836,81 @@ void vs_tile_render(void *arg, int worker, int task)
             const float *q = buf[cur];
             /* 1. classification + gradients */
             double t0 = vs_now_ms();
-            for (int y = r.y0; y < r.y1; y++)
-                for (int x = r.x0; x < r.x1; x++) {
-                    int o = (y - 1) * t.tw + (x - 1);
-                    size_t b = (size_t)y * t.stride + x;
-                    float a;
-                    if (pl == VS_PIPELINE_PRE) {
-                        a = q[4 * b + 3];
-                    } else if (pl == VS_PIPELINE_POST_CD) {
-                        a = lookup_corr(F, F->alpha_corr, q[b]);
-                        if (a > 0.0f) {
-                            sb.g[3 * o + 0] = 0.5f * (q[b + 1] - q[b - 1]);
-                            sb.g[3 * o + 1] = 0.5f * (q[b + t.stride] - q[b - t.stride]);
-                            sb.g[3 * o + 2] = (buf[nxt][b] - buf[prev][b]) / (2.0f * slab);
-                        }
-                    } else if (pl == VS_PIPELINE_POST_GS) {
-                        a = lookup_corr(F, F->alpha_corr, q[4 * b]);
-                        if (a > 0.0f) {
-                            sb.g[3 * o + 0] = q[4 * b + 1] / slab;
-                            sb.g[3 * o + 1] = q[4 * b + 2] / slab;
-                            sb.g[3 * o + 2] = q[4 * b + 3] / slab;
-                        }
-                    } else { /* post-alpha */
-                        a = lookup_corr(F, F->alpha_corr, q[4 * b + 3]);
-                    }
-                    sb.alpha[o] = a;
+            /* the tables the post-shaded kernels read (a few stores a sheet) */
+            const vs_shade_tabs tabs = {.vmin = F->cls->vmin, .scale = F->cls->scale, .alpha = F->alpha_corr,
+                                        .color = &F->cls->color[0][0], .slab = slab, .two_slab = 2.0f * slab,
+                                        .ppm = (float)F->cam.px_per_mm, .zpm = (float)F->cam.z_per_mm,
+                                        .nl = F->lut.nl, .lambda_bin = F->lut.lambda_bin, .radius = F->lut.radius,
+                                        .phi_bin = F->lut.phi_bin, .diffuse = F->lut.diffuse,
+                                        .specular = F->lut.specular};
+            if (pl == VS_PIPELINE_POST_CD) {
+                for (int y = r.y0; y < r.y1; y++) {
+                    int o = (y - 1) * t.tw + (r.x0 - 1);
+                    size_t b = (size_t)y * t.stride + r.x0;
+                    F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, q + b, buf[prev] + b, buf[nxt] + b, t.stride,
+                                        r.x1 - r.x0, &tabs);
                 }
+            } else if (pl == VS_PIPELINE_POST_GS) {
+                for (int y = r.y0; y < r.y1; y++) {
+                    int o = (y - 1) * t.tw + (r.x0 - 1);
+                    size_t b = (size_t)y * t.stride + r.x0;
+                    F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, q + 4 * b, r.x1 - r.x0, &tabs);
+                }
+            } else {
+                for (int y = r.y0; y < r.y1; y++)
+                    for (int x = r.x0; x < r.x1; x++) {
+                        int o = (y - 1) * t.tw + (x - 1);
+                        size_t b = (size_t)y * t.stride + x;
+                        float a;
+                        if (pl == VS_PIPELINE_PRE) {
+                            a = q[4 * b + 3];
+                        } else { /* post-alpha */
+                            a = lookup_corr(F, F->alpha_corr, q[4 * b + 3]);
+                        }
+                        sb.alpha[o] = a;
+                    }
+            }
             if (F->clip_to_volume) clip_outside(&t, k, &r, sb.alpha);
             if (F->cam.persp && pl == VS_PIPELINE_POST_CD) perspective_gradients(&t, k, &r, sb.alpha, sb.g);
             double t1 = vs_now_ms();
             /* 2. shading: colour per pixel */
-            for (int y = r.y0; y < r.y1; y++)
-                for (int x = r.x0; x < r.x1; x++) {
-                    int o = (y - 1) * t.tw + (x - 1);
-                    size_t b = (size_t)y * t.stride + x;
-                    float a = sb.alpha[o];
-                    if (!(a > 0.0f)) continue;
-                    float *c = sb.g + 3 * o;
-                    if (pl == VS_PIPELINE_PRE) {
-                        /* opacity-weighted colour / interpolated opacity */
-                        float inv = 1.0f / a;
-                        float cr = q[4 * b] * inv, cg = q[4 * b + 1] * inv, cb = q[4 * b + 2] * inv;
-                        c[0] = cr > 1.0f ? 1.0f : cr;
-                        c[1] = cg > 1.0f ? 1.0f : cg;
-                        c[2] = cb > 1.0f ? 1.0f : cb;
-                        sb.alpha[o] = pre_opacity(F, a);
-                    } else if (pl == VS_PIPELINE_POST_ALPHA) {
-                        for (int i = 0; i < 3; i++) {
-                            float v = q[4 * b + i];
-                            c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
-                        }
-                    } else {
-                        float d, sp, rgb[3];
-                        shade_gradient(F, c[0], c[1], c[2], &d, &sp);
-                        lookup_color(F, pl == VS_PIPELINE_POST_CD ? q[b] : q[4 * b], rgb);
-                        c[0] = rgb[0] * d + sp;
-                        c[1] = rgb[1] * d + sp;
-                        c[2] = rgb[2] * d + sp;
-                    }
+            if ((pl == VS_PIPELINE_POST_CD || pl == VS_PIPELINE_POST_GS) && !s->exact_normals) {
+                for (int y = r.y0; y < r.y1; y++) {
+                    int o = (y - 1) * t.tw + (r.x0 - 1);
+                    size_t b = (size_t)y * t.stride + r.x0;
+                    F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, q + ch * b, ch, r.x1 - r.x0, &tabs);
                 }
+            } else {
+                for (int y = r.y0; y < r.y1; y++)
+                    for (int x = r.x0; x < r.x1; x++) {
+                        int o = (y - 1) * t.tw + (x - 1);
+                        size_t b = (size_t)y * t.stride + x;
+                        float a = sb.alpha[o];
+                        if (!(a > 0.0f)) continue;
+                        float *c = sb.g + 3 * o;
+                        if (pl == VS_PIPELINE_PRE) {
+                            /* opacity-weighted colour / interpolated opacity */
+                            float inv = 1.0f / a;
+                            float cr = q[4 * b] * inv, cg = q[4 * b + 1] * inv, cb = q[4 * b + 2] * inv;
+                            c[0] = cr > 1.0f ? 1.0f : cr;
+                            c[1] = cg > 1.0f ? 1.0f : cg;
+                            c[2] = cb > 1.0f ? 1.0f : cb;
+                            sb.alpha[o] = pre_opacity(F, a);
+                        } else if (pl == VS_PIPELINE_POST_ALPHA) {
+                            for (int i = 0; i < 3; i++) {
+                                float v = q[4 * b + i];
+                                c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
+                            }
+                        } else {
+                            float d, sp, rgb[3];
+                            shade_gradient(F, c[0], c[1], c[2], &d, &sp);
+                            lookup_color(F, pl == VS_PIPELINE_POST_CD ? q[b] : q[4 * b], rgb);
+                            c[0] = rgb[0] * d + sp;
+                            c[1] = rgb[1] * d + sp;
+                            c[2] = rgb[2] * d + sp;
+                        }
+                    }
+            }
             if (F->cam.persp) perspective_opacity(&t, &r, sb.alpha);
             double t2 = vs_now_ms();
             /* 3. front-to-back compositing; the accumulated opacity is the

@@ -9,6 +9,9 @@
 #include "kernels.h"
 #include "testutil.h"
 
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 
@@ -92,6 +95,231 @@ static void check_block(const char *isa, vs_splat_block_fn fn)
     printf("%-13s %-7s bit-identical to scalar in %d cases\n", "splat_block", isa, cases);
 }
 
+
+/* Shading tables filled with random entries (every index mistake shows),
+ * padded by 4 bytes as vs_shade_lut_setup does for 32-bit gathers. */
+enum { NL = 64, NP = NL / 2 + 1 };
+typedef struct shade_fixture {
+    float alpha[VS_KTAB], color[3 * VS_KTAB], diffuse[NP * NL], specular[NP * NL];
+    uint16_t lambda_bin[255 * 255 + 2], phi_bin[255 * 181 + 2];
+    uint8_t radius[255 * 255 + 4];
+    vs_shade_tabs T;
+} shade_fixture;
+
+static void fixture_init(shade_fixture *F)
+{
+    for (int i = 0; i < VS_KTAB; i++) F->alpha[i] = frand() > 0.0f ? frand() * 0.5f + 0.5f : 0.0f;
+    F->alpha[0] = 0.0f;
+    F->alpha[VS_KTAB - 1] = 1.0f; /* alpha 1 at the top end */
+    for (int i = 0; i < 3 * VS_KTAB; i++) F->color[i] = frand() * 0.5f + 0.5f;
+    for (int i = 0; i < NP * NL; i++) {
+        F->diffuse[i] = frand() * 0.5f + 0.5f;
+        F->specular[i] = frand() * 0.5f + 0.5f;
+    }
+    memset(F->lambda_bin, 0, sizeof F->lambda_bin);
+    memset(F->phi_bin, 0, sizeof F->phi_bin);
+    memset(F->radius, 0, sizeof F->radius);
+    for (int i = 0; i < 255 * 255; i++) {
+        rng_state = rng_state * 1664525u + 1013904223u;
+        F->lambda_bin[i] = (uint16_t)((rng_state >> 8) % NL);
+        F->radius[i] = (uint8_t)((rng_state >> 20) % 181);
+    }
+    for (int i = 0; i < 255 * 181; i++) {
+        rng_state = rng_state * 1664525u + 1013904223u;
+        F->phi_bin[i] = (uint16_t)((rng_state >> 8) % NP);
+    }
+    /* x = (v + 10) * 4095 / 20: v in [-10, 10] spans the table */
+    F->T = (vs_shade_tabs){.vmin = -10.0, .scale = 4095.0 / 20.0, .alpha = F->alpha, .color = F->color,
+                           .slab = 0.375f, .two_slab = 0.75f, .ppm = 1.3f, .zpm = 0.9f, .nl = NL,
+                           .lambda_bin = F->lambda_bin, .radius = F->radius, .phi_bin = F->phi_bin,
+                           .diffuse = F->diffuse, .specular = F->specular};
+}
+
+/* a density: mostly inside the table, plus its ends, beyond them, NaN, +-Inf */
+static float density(void)
+{
+    rng_state = rng_state * 1664525u + 1013904223u;
+    switch ((rng_state >> 24) % 16) {
+    case 0: return NAN;
+    case 1: return INFINITY;
+    case 2: return -INFINITY;
+    case 3: return -10.0f; /* x = 0 */
+    case 4: return 10.0f;  /* x = 4095: the last entry */
+    case 5: return 1e30f;
+    case 6: return -1e30f;
+    case 7: return 0.0f;
+    case 8: return 9.998f; /* x = 4094.6: the last interpolated interval */
+    default: return frand() * 11.0f;
+    }
+}
+
+/* a gradient component: random, zero, tiny, huge, NaN, Inf */
+static float gcomp(void)
+{
+    rng_state = rng_state * 1664525u + 1013904223u;
+    switch ((rng_state >> 24) % 16) {
+    case 0: return 0.0f;
+    case 1: return -0.0f;
+    case 2: return 1e-31f;
+    case 3: return FLT_MAX;
+    case 4: return -INFINITY;
+    case 5: return NAN;
+    case 6: return 0.0f;
+    default: return frand() * 50.0f;
+    }
+}
+
+/* step 1 of post-cd: a 3-row density sheet and its neighbours; the
+ * outputs' guard floats must not change */
+static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fixture *F)
+{
+    enum { S = MAXN + 2 * PAD };
+    float q[3 * S], qp[3 * S], qn[3 * S];
+    float ar[MAXN + PAD], ao[MAXN + PAD], gr[3 * (MAXN + PAD)], go[3 * (MAXN + PAD)];
+    int cases = 0;
+    for (int n = 0; n <= MAXN; n++)
+        for (int off = 0; off < 4; off++)
+            for (int rep = 0; rep < 4; rep++) {
+                for (int i = 0; i < 3 * S; i++) {
+                    q[i] = density();
+                    qp[i] = rep == 1 ? q[i] : density(); /* rep 1: zero z gradient */
+                    qn[i] = density();
+                }
+                for (int i = 0; i < MAXN + PAD; i++) ar[i] = ao[i] = frand();
+                for (int i = 0; i < 3 * (MAXN + PAD); i++) gr[i] = go[i] = frand();
+                const int b = S + PAD / 2 + off; /* middle row, unaligned */
+                vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, S, n, &F->T);
+                fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, S, n, &F->T);
+                if (memcmp(ar, ao, sizeof ar) != 0 || memcmp(gr, go, sizeof gr) != 0) {
+                    if (isa) CHECK(0, "classify_cd %s differs from scalar at n=%d offset=%d rep %d", isa, n, off, rep);
+                    return 0;
+                }
+                cases++;
+            }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_cd", isa, cases);
+    return 1;
+}
+
+/* step 1 of post-gs: (density, gradient splats) per pixel; densities as
+ * above, gradient splats with zeros, NaN and Inf */
+static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_fixture *F)
+{
+    float q4[4 * (MAXN + PAD)], ar[MAXN + PAD], ao[MAXN + PAD], gr[3 * (MAXN + PAD)], go[3 * (MAXN + PAD)];
+    int cases = 0;
+    for (int n = 0; n <= MAXN; n++)
+        for (int off = 0; off < 4; off++)
+            for (int rep = 0; rep < 2; rep++) {
+                for (int i = 0; i < MAXN + PAD; i++) {
+                    q4[4 * i] = density();
+                    for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
+                    ar[i] = ao[i] = frand();
+                }
+                for (int i = 0; i < 3 * (MAXN + PAD); i++) gr[i] = go[i] = frand();
+                vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &F->T);
+                fn(ao + off, go + 3 * off, q4 + 4 * off, n, &F->T);
+                if (memcmp(ar, ao, sizeof ar) != 0 || memcmp(gr, go, sizeof gr) != 0) {
+                    if (isa) CHECK(0, "classify_gs %s differs from scalar at n=%d offset=%d rep %d", isa, n, off, rep);
+                    return 0;
+                }
+                cases++;
+            }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_gs", isa, cases);
+    return 1;
+}
+
+/* step 2: gradients with zeros, tiny, huge, NaN and Inf components,
+ * opacities 0, -0, NaN, 1 and random; densities read with stride 1 (post-cd)
+ * and 4 (post-gs) */
+static int check_shade(const char *isa, vs_shade_lut_fn fn, const shade_fixture *F)
+{
+    float al[MAXN + PAD], v[4 * (MAXN + PAD)], gr[3 * (MAXN + PAD)], go[3 * (MAXN + PAD)];
+    int cases = 0;
+    for (int n = 0; n <= MAXN; n++)
+        for (int off = 0; off < 4; off++)
+            for (int vs = 1; vs <= 4; vs += 3)
+                for (int rep = 0; rep < 3; rep++) {
+                    for (int i = 0; i < MAXN + PAD; i++) {
+                        rng_state = rng_state * 1664525u + 1013904223u;
+                        unsigned c = (rng_state >> 24) % 8;
+                        al[i] = c == 0 ? 0.0f : c == 1 ? -0.0f : c == 2 ? NAN : c == 3 ? 1.0f : frand();
+                        if (rep == 2) al[i] = 1.0f; /* every pixel shaded */
+                    }
+                    for (int i = 0; i < 4 * (MAXN + PAD); i++) v[i] = density();
+                    for (int i = 0; i < 3 * (MAXN + PAD); i++) gr[i] = go[i] = rep == 1 ? frand() * 5.0f : gcomp();
+                    vs_shade_lut_scalar(gr + 3 * off, al + off, v + off, vs, n, &F->T);
+                    fn(go + 3 * off, al + off, v + off, vs, n, &F->T);
+                    if (memcmp(gr, go, sizeof gr) != 0) {
+                        if (isa)
+                            CHECK(0, "shade_lut %s differs from scalar at n=%d offset=%d vstride=%d rep %d", isa, n,
+                                  off, vs, rep);
+                        return 0;
+                    }
+                    cases++;
+                }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "shade_lut", isa, cases);
+    return 1;
+}
+
+/* compositing: accumulators with opacity below, at and above the
+ * threshold and at 1; alpha 0, -0, NaN, 1 and random; colours of hidden
+ * pixels NaN (they must not leak); thresholds 0.5 and 1 */
+static int check_composite(const char *isa, vs_composite_fn fn)
+{
+    float ar[4 * (MAXN + PAD)], ao[4 * (MAXN + PAD)], al[MAXN + PAD], rgb[3 * (MAXN + PAD) + 1];
+    int cases = 0;
+    for (int n = 0; n <= MAXN; n++)
+        for (int off = 0; off < 4; off++)
+            for (int rep = 0; rep < 4; rep++) {
+                const float thr = rep & 1 ? 1.0f : 0.5f;
+                for (int i = 0; i < MAXN + PAD; i++) {
+                    rng_state = rng_state * 1664525u + 1013904223u;
+                    unsigned c = (rng_state >> 24) % 8;
+                    al[i] = c == 0 ? 0.0f : c == 1 ? -0.0f : c == 2 ? NAN : c == 3 ? 1.0f : frand() * 0.5f + 0.5f;
+                    if (rep == 2) al[i] = 0.25f; /* every pixel visible */
+                    for (int k = 0; k < 3; k++) rgb[3 * i + k] = al[i] > 0.0f ? frand() : NAN;
+                    float o = frand() * 0.5f + 0.5f; /* opacity so far, [0, 1) */
+                    if (c == 4) o = 0.5f;
+                    if (c == 5) o = 1.0f;
+                    for (int k = 0; k < 3; k++) ar[4 * i + k] = ao[4 * i + k] = frand();
+                    ar[4 * i + 3] = ao[4 * i + 3] = o;
+                }
+                rgb[3 * (MAXN + PAD)] = 0.0f;
+                int cr = vs_composite_scalar(ar + 4 * off, al + off, rgb + 3 * off, n, thr);
+                int co = fn(ao + 4 * off, al + off, rgb + 3 * off, n, thr);
+                if (cr != co || memcmp(ar, ao, sizeof ar) != 0) {
+                    if (isa) CHECK(0, "composite %s differs from scalar at n=%d offset=%d rep %d (crossed %d vs %d)", isa, n, off, rep, cr, co);
+                    return 0;
+                }
+                cases++;
+            }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "composite", isa, cases);
+    return 1;
+}
+
+static int composite_off(float *acc, const float *alpha, const float *rgb, int n, float thr)
+{
+    int c = vs_composite_scalar(acc, alpha, rgb, n, thr);
+    return n > 5 ? c + (alpha[5] > 0.0f) : c;
+}
+
+/* The checks must be able to fail: versions off by one ulp in one pixel */
+static void classify_off(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                         int n, const vs_shade_tabs *T)
+{
+    vs_classify_cd_scalar(alpha, g, q, qp, qn, stride, n, T);
+    if (n > 5) g[3 * 5 + 2] = nextafterf(g[3 * 5 + 2], INFINITY);
+}
+static void classify_gs_off(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+{
+    vs_classify_gs_scalar(alpha, g, q4, n, T);
+    if (n > 5) alpha[5] = nextafterf(alpha[5], INFINITY);
+}
+static void shade_off(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
+{
+    vs_shade_lut_scalar(g, alpha, v, vstride, n, T);
+    if (n > 5 && alpha[5] > 0.0f) g[3 * 5 + 1] = nextafterf(g[3 * 5 + 1], INFINITY);
+}
+
 /* The dispatch honours the cap and never goes past the CPU. */
 static void check_dispatch(void)
 {
@@ -102,7 +330,8 @@ static void check_dispatch(void)
         vs_isa want = (vs_isa)cap > best ? best : (vs_isa)cap;
         CHECK(k.isa == want, "cap %s gave %s, expected %s", vs_isa_name((vs_isa)cap), vs_isa_name(k.isa),
               vs_isa_name(want));
-        CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block, "cap %s: empty entry",
+        CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.classify_cd &&
+                  k.classify_gs && k.shade_lut, "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
     vs_kernels k;
@@ -116,6 +345,13 @@ int main(void)
     printf("this CPU: best ISA %s\n", vs_isa_name(best));
     check_dispatch();
     check_block("scalar", vs_splat_block_scalar);
+    static shade_fixture fx;
+    fixture_init(&fx);
+    CHECK(!check_classify(NULL, classify_off, &fx), "check_classify cannot tell a wrong kernel from the reference");
+    CHECK(!check_classify_gs(NULL, classify_gs_off, &fx),
+          "check_classify_gs cannot tell a wrong kernel from the reference");
+    CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
+    CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
@@ -127,6 +363,10 @@ int main(void)
         check_row4("avx2", vs_splat_row4_avx2, 0, NULL);
         check_row4("avx2", NULL, 1, vs_splat_row_gs_avx2);
         check_block("avx2", vs_splat_block_avx2);
+        check_classify("avx2", vs_classify_cd_avx2, &fx);
+        check_classify_gs("avx2", vs_classify_gs_avx2, &fx);
+        check_shade("avx2", vs_shade_lut_avx2, &fx);
+        check_composite("avx2", vs_composite_avx2);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
