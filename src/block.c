@@ -18,13 +18,16 @@ static float weight(const vs_footprint *fp, double e)
     return e < fp->emax ? vs_fp_exp(fp, (float)e) : 0.0f;
 }
 
-int vs_block_setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad)
+static int setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad, int skewed)
 {
     memset(g, 0, sizeof *g);
     double det = (double)fp->A * fp->C - (double)fp->B * fp->B;
+    /* the row weight's exponent per dy^2: C when separable, C - B^2/A when
+     * each row's centre moves (skewed) */
+    const double ky = skewed ? fp->row_k : fp->C;
     g->ch = ch;
     g->grad = grad;
-    g->rx0 = (float)sqrt(fp->emax * fp->C / det);
+    g->rx0 = (float)sqrt(skewed && fp->B != 0.0f ? fp->emax / fp->A : fp->emax * fp->C / det);
     g->ry0 = (float)sqrt(fp->emax * fp->A / det);
     g->nx = (int)floorf(2.0f * g->rx0) + 1;
     g->ny = (int)floorf(2.0f * g->ry0) + 1;
@@ -45,10 +48,122 @@ int vs_block_setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad)
         }
         for (int j = 0; j < g->ny; j++) {
             double dy = j + u - g->ry0;
-            g->roww[(size_t)q * g->ny + j] = weight(fp, fp->C * dy * dy);
+            g->roww[(size_t)q * g->ny + j] = weight(fp, ky * dy * dy);
         }
     }
     return 1;
+}
+
+int vs_block_setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad)
+{
+    return setup(g, fp, ch, grad, 0);
+}
+
+int vs_block_setup_skewed(vs_block_geom *g, const vs_footprint *fp)
+{
+    return setup(g, fp, 1, 0, 1);
+}
+
+static void lerp(float *out, const float *t0, const float *t1, float f, int a, int b);
+
+int vs_block_skewed_nvec(const vs_block_geom *g, float row_shift, int ch)
+{
+    int width = g->nx + (int)ceilf(fabsf(row_shift) * (float)g->ny) + 2;
+    return (width * ch + 7) / 8;
+}
+
+static inline int phase_row(float u, float *f)
+{
+    float s = u * (float)VS_BLOCK_PHASES;
+    int q = (int)s;
+    if (q > VS_BLOCK_PHASES - 1) q = VS_BLOCK_PHASES - 1;
+    *f = s - (float)q;
+    return q;
+}
+
+void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, float cy, int ch, int maxvec,
+                           float *blk, int *x, int *y, int *nvec)
+{
+    int xs[VS_BLOCK_MAX_SPAN];
+    float ux[VS_BLOCK_MAX_SPAN];
+    const float ly = cy - g->ry0, py = ceilf(ly), uy = py - ly;
+    float fy;
+    const float *r0 = g->roww + (size_t)phase_row(uy, &fy) * g->ny;
+    /* each row's centre and first pixel (the row's offset from the centre
+     * is exactly as row_footprint_skewed computes it) */
+    /* the rows' left edges lx are monotonic in the row, so equal ends mean
+     * every row has the same one: no skew (axis-aligned, only sheared) */
+    const float lx0 = cx + row_shift * (uy - g->ry0) - g->rx0;
+    const float lx1 = cx + row_shift * ((float)(g->ny - 1) + uy - g->ry0) - g->rx0;
+    const int uniform = lx0 == lx1;
+    int xmin = 1 << 30, xmax = -(1 << 30);
+    for (int j = 0; j < (uniform ? 1 : g->ny); j++) {
+        const float c = cx + row_shift * ((float)j + uy - g->ry0);
+        const float lx = c - g->rx0, px = ceilf(lx);
+        xs[j] = (int)px;
+        ux[j] = px - lx;
+        if (xs[j] < xmin) xmin = xs[j];
+        if (xs[j] > xmax) xmax = xs[j];
+    }
+    int n = ((xmax - xmin + g->nx) * ch + 7) / 8;
+    if (n > maxvec) n = maxvec; /* cannot happen: vs_block_skewed_nvec bounds the drift */
+    const int stride = 8 * maxvec, width = 8 * n / ch;
+    *x = xmin;
+    *y = (int)py;
+    *nvec = n;
+    if (uniform) {
+        /* every row at the same phase (no skew: axis-aligned, only sheared):
+         * one column look-up serves all rows; the table is 0 past nx and
+         * at least `width` wide, so whole rows are written */
+        float cw[VS_BLOCK_MAX_SPAN + 8], rw[VS_BLOCK_MAX_SPAN], fx;
+        const float *c0 = g->colw + (size_t)phase_row(ux[0], &fx) * g->bx;
+        lerp(cw, c0, c0 + g->bx, fx, 0, width);
+        lerp(rw, r0, r0 + g->ny, fy, 0, g->ny);
+        const float thr = g->thr;
+        for (int j = 0; j < g->ny; j++) {
+            float *row = blk + (size_t)j * stride;
+            const float ry = rw[j];
+            if (ch == 1) {
+                for (int i = 0; i < width; i++) {
+                    float h = cw[i] * ry;
+                    row[i] = h > thr ? h : 0.0f;
+                }
+            } else {
+                for (int i = 0; i < width; i++) {
+                    float h = cw[i] * ry;
+                    h = h > thr ? h : 0.0f;
+                    row[4 * i] = row[4 * i + 1] = row[4 * i + 2] = row[4 * i + 3] = h;
+                }
+            }
+        }
+        return;
+    }
+    for (int j = 0; j < g->ny; j++) {
+        float *row = blk + (size_t)j * stride;
+        memset(row, 0, (size_t)8 * n * sizeof(float));
+        const float rw = r0[j] + fy * (r0[g->ny + j] - r0[j]);
+        if (!(rw > 0.0f)) continue;
+        float fx;
+        const float *c0 = g->colw + (size_t)phase_row(ux[j], &fx) * g->bx, *c1 = c0 + g->bx;
+        const int o = xs[j] - xmin;
+        const int m = o + g->nx <= width ? g->nx : width - o;
+        const float thr = g->thr;
+        /* simple loops per layout, so the compiler vectorises them */
+        if (ch == 1) {
+            float *r = row + o;
+            for (int i = 0; i < m; i++) {
+                float h = (c0[i] + fx * (c1[i] - c0[i])) * rw;
+                r[i] = h > thr ? h : 0.0f;
+            }
+        } else {
+            float *r = row + 4 * o;
+            for (int i = 0; i < m; i++) {
+                float h = (c0[i] + fx * (c1[i] - c0[i])) * rw;
+                h = h > thr ? h : 0.0f;
+                r[4 * i] = r[4 * i + 1] = r[4 * i + 2] = r[4 * i + 3] = h;
+            }
+        }
+    }
 }
 
 /* out[i] = t0[i] + f (t1[i] - t0[i]) for i in [a, b) */

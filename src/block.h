@@ -36,6 +36,18 @@ typedef struct vs_block_geom {
 
 #define VS_BLOCK_PHASES 256
 
+/* 8-float vectors a skewed block row needs at most for ch floats a pixel:
+ * the widest row plus the drift of the row centres over the rows. */
+int vs_block_skewed_nvec(const vs_block_geom *g, float row_shift, int ch);
+/* The block of a general footprint (skewed tables) centred at image
+ * position (cx, cy): g->ny rows, each placed at its own column phase, laid
+ * into one rectangle of ch-float pixels (zeros where a row does not reach;
+ * ch = 4 repeats the weight in every channel), rows 8 maxvec floats apart.
+ * Out: image column x and row y of the rectangle's first pixel and its
+ * vectors per row (<= maxvec). */
+void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, float cy, int ch, int maxvec,
+                           float *blk, int *x, int *y, int *nvec);
+
 /* Where one voxel's block lands: image column/row of its first pixel and
  * its phase-table rows. */
 typedef struct vs_block_place {
@@ -46,8 +58,16 @@ typedef struct vs_block_place {
     float fx, fy;    /* ... and the interpolation weights of the next rows */
 } vs_block_place;
 
-/* Tables for a separable footprint; returns 0 when out of memory. */
+/* Tables for a separable footprint; returns 0 when out of memory or too
+ * large (VS_BLOCK_MAX_SPAN). */
 int vs_block_setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad);
+/* Skewed tables for any footprint (rotated or sheared ellipses): written as
+ * exp(-A (dx - row_shift dy)^2) exp(-row_k dy^2), a footprint is a row
+ * weight (roww, with row_k) times column weights (colw, with A) about a
+ * centre that moves by row_shift per row, so each row takes its own column
+ * phase.  rx0 is then the half-width of the widest row.  For a separable
+ * footprint the tables equal vs_block_setup's.  Returns 0 like it. */
+int vs_block_setup_skewed(vs_block_geom *g, const vs_footprint *fp);
 void vs_block_free(vs_block_geom *g);
 
 /* The block of a voxel centred at image position (cx, cy). */

@@ -143,6 +143,7 @@ static void free_frame(vs_frame *F)
 {
     vs_footprint_free(&F->fp);
     vs_block_free(&F->blk);
+    vs_block_free(&F->skew);
     vs_shade_lut_free(&F->lut);
     free(F->cls);
     free(F->bview);
@@ -197,6 +198,13 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
                 goto fail;
             }
             F.use_blocks = 1;
+        } else if (!F.cam.persp && nx <= VS_BLOCK_MAX_SPAN && ny <= VS_BLOCK_MAX_SPAN) {
+            /* sheet at a time, each row's weights from skewed phase tables
+             * instead of an exponential per pixel (without the tables, e.g.
+             * when out of memory, the exponential path still serves) */
+            F.use_skewed = vs_block_setup_skewed(&F.skew, &F.fp);
+            F.skew_maxvec = vs_block_skewed_nvec(&F.skew, F.fp.row_shift,
+                                                 s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4);
         }
     }
     if (!s->exact_normals && (rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, &F.lut)) != VS_OK)

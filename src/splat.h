@@ -29,6 +29,11 @@ typedef struct vs_frame {
     int use_blocks;                  /* separable footprints: voxel at a time with
                                         footprint blocks (src/block.h)           */
     vs_block_geom blk;
+    int use_skewed;                  /* general footprints, orthographic: rows
+                                        from skewed phase tables, one block per
+                                        section (post-gs: row by row)        */
+    vs_block_geom skew;
+    int skew_maxvec;                 /* vectors per skewed block row          */
     vs_shade_lut lut;
     vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;

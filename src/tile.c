@@ -155,15 +155,61 @@ static inline void merge_box(rect *bb, const rect *r)
     if (r->y1 > bb->y1) bb->y1 = r->y1;
 }
 
-/* General (sheared or rotated-ellipse) footprints: the weights of row y
- * into t->ex[xa..xb]; 0 if the row misses the footprint. */
-static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, int *xb)
+/* Row y of a footprint from the skewed phase tables (src/block.h): the row
+ * weight at the section's vertical phase times the column weights at the
+ * row's own horizontal phase, both interpolated between table phases as
+ * footprint blocks are; exactly 0 outside the kernel's radius.  Every value
+ * depends on the section and the pixel alone, never on the tile. */
+static int row_footprint_skewed(const tile_ctx *t, const section *sec, int y, int *xa, int *xb, float *cxr)
 {
+    const vs_block_geom *g = &t->F->skew;
+    const float ly = sec->cy - g->ry0, py = ceilf(ly), uy = py - ly;
+    const int j = (y + t->oy) - (int)py; /* table row */
+    if (j < 0 || j >= g->ny) return 0;
+    float sy = uy * (float)VS_BLOCK_PHASES;
+    int qy = (int)sy;
+    if (qy > VS_BLOCK_PHASES - 1) qy = VS_BLOCK_PHASES - 1;
+    const float fy = sy - (float)qy;
+    const float *r0 = g->roww + (size_t)qy * g->ny;
+    const float rw = r0[j] + fy * (r0[g->ny + j] - r0[j]);
+    if (!(rw > 0.0f)) return 0;
+    const float c = sec->cx + t->fp->row_shift * ((float)j + uy - g->ry0);
+    const float lx = c - g->rx0, px = ceilf(lx), ux = px - lx;
+    float sx = ux * (float)VS_BLOCK_PHASES;
+    int qx = (int)sx;
+    if (qx > VS_BLOCK_PHASES - 1) qx = VS_BLOCK_PHASES - 1;
+    const float fx = sx - (float)qx;
+    const float *c0 = g->colw + (size_t)qx * g->bx, *c1 = c0 + g->bx;
+    const int first = (int)px - t->ox; /* buffer column of table column 0 */
+    int a = first < 0 ? 0 : first, b = first + g->nx - 1;
+    if (b > t->bw - 1) b = t->bw - 1;
+    float *ex = t->ex;
+    const float thr = g->thr;
+    for (int x = a; x <= b; x++) {
+        const int i = x - first;
+        const float h = (c0[i] + fx * (c1[i] - c0[i])) * rw;
+        ex[x] = h > thr ? h : 0.0f;
+    }
+    while (a <= b && ex[a] == 0.0f) a++; /* keep the touched box tight */
+    while (b >= a && ex[b] == 0.0f) b--;
+    *xa = a;
+    *xb = b;
+    *cxr = c;
+    return a <= b;
+}
+
+/* General (sheared or rotated-ellipse) footprints: the weights of row y
+ * into t->ex[xa..xb] and the row's centre in pixels; 0 if the row misses
+ * the footprint.  From the skewed tables when orthographic, else (sections
+ * scaled by perspective) an exponential per pixel. */
+static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, int *xb, float *cxr)
+{
+    if (t->F->use_skewed && sec->sc == 1.0f) return row_footprint_skewed(t, sec, y, xa, xb, cxr);
     const vs_footprint *fp = t->fp;
-    float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er, cxr;
-    if (!cols_of(t, sec, dy, &er, &cxr, xa, xb)) return 0;
+    float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er;
+    if (!cols_of(t, sec, dy, &er, cxr, xa, xb)) return 0;
     for (int x = *xa; x <= *xb; x++) {
-        float dx = ((float)(x + t->ox) - cxr) * sec->is;
+        float dx = ((float)(x + t->ox) - *cxr) * sec->is;
         t->ex[x] = vs_fp_exp(fp, er + fp->A * dx * dx);
     }
     return 1;
@@ -173,10 +219,11 @@ static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, 
 static void raster1(const tile_ctx *t, const section *sec, float w, float *q, rect *bb)
 {
     int ya, yb, xa, xb;
+    float cxr;
     if (!rows_of(t, sec, &ya, &yb)) return;
     w *= sec->D;
     for (int y = ya; y <= yb; y++) {
-        if (!row_footprint(t, sec, y, &xa, &xb)) continue;
+        if (!row_footprint(t, sec, y, &xa, &xb, &cxr)) continue;
         t->F->kern.splat_row1(q + (size_t)y * t->stride + xa, t->ex + xa, w, xb - xa + 1);
         grow(bb, xa, xb, y);
     }
@@ -186,13 +233,40 @@ static void raster1(const tile_ctx *t, const section *sec, float w, float *q, re
 static void raster4(const tile_ctx *t, const section *sec, const float w4[4], float *buf, rect *bb)
 {
     int ya, yb, xa, xb;
+    float cxr;
     if (!rows_of(t, sec, &ya, &yb)) return;
     float w[4] = {w4[0] * sec->D, w4[1] * sec->D, w4[2] * sec->D, w4[3] * sec->D};
     for (int y = ya; y <= yb; y++) {
-        if (!row_footprint(t, sec, y, &xa, &xb)) continue;
+        if (!row_footprint(t, sec, y, &xa, &xb, &cxr)) continue;
         t->F->kern.splat_row4(buf + ((size_t)y * t->stride + xa) * 4, t->ex + xa, w, xb - xa + 1);
         grow(bb, xa, xb, y);
     }
+}
+
+/* A general footprint as one skewed block (src/block.h) added by the
+ * block kernel: density (post-cd, ch 1) or four channels with their own
+ * weights (pre, post-alpha).  Only the rows inside the buffer and the
+ * vectors overlapping it are added; a vector may spill into the apron. */
+static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb)
+{
+    const vs_frame *F = t->F;
+    const vs_block_geom *g = &F->skew;
+    const int ppv = 8 / ch, bs = 8 * F->skew_maxvec;
+    int x, y, nvec;
+    vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, F->skew_maxvec, t->blk, &x, &y, &nvec);
+    const int by = y - t->oy, bx = x - t->ox;
+    const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+    const int v0 = bx < 0 ? -bx / ppv : 0;
+    int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+    if (v1 > nvec) v1 = nvec;
+    if (j0 >= j1 || v0 >= v1) return;
+    float w8[8];
+    for (int c = 0; c < 8; c++) w8[c] = w4[ch == 1 ? 0 : c % 4] * sec->D;
+    const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
+    const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+    F->kern.splat_block(dst + off, ds, t->blk + (size_t)j0 * bs + 8 * v0, bs, j1 - j0, v1 - v0, w8);
+    const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
+    merge_box(bb, &box);
 }
 
 /* Density plus the three gradient splats dH/dx, dH/dy, dH/dz (FH'):
@@ -210,13 +284,13 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
     float A = fp->A, B = fp->B, rk = fp->row_k;
     float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
     for (int y = ya; y <= yb; y++) {
-        float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er, cxr;
+        float dy = ((float)(y + t->oy) - sec->cy) * sec->is, cxr;
         int xa, xb;
-        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
+        if (!row_footprint(t, sec, y, &xa, &xb, &cxr)) continue;
         float *row = buf + (size_t)y * t->stride * 4;
         for (int x = xa; x <= xb; x++) {
             float dx = ((float)(x + t->ox) - cxr) * sec->is;
-            float h = vs_fp_exp(fp, er + A * dx * dx);
+            float h = t->ex[x];
             float dxs = dx + rs * dy; /* x offset from the shifted centre */
             float *p = row + 4 * x;
             p[0] += wD * h;
@@ -465,6 +539,10 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         section sec;
         if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
+        if (F->use_skewed && sec.sc == 1.0f && F->pipeline != VS_PIPELINE_POST_GS) {
+            raster_skewed(t, &sec, e->w, F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, dst, bb);
+            continue;
+        }
         switch (F->pipeline) {
         case VS_PIPELINE_POST_CD: raster1(t, &sec, e->w[0], dst, bb); break;
         case VS_PIPELINE_POST_GS: raster_gs(t, &sec, e->w[0], dst, bb); break;
@@ -718,7 +796,9 @@ void vs_tile_render(void *arg, int worker, int task)
     t.rey = malloc((size_t)t.bh * 2 * sizeof(float));
     t.rdy = t.rey ? t.rey + t.bh : NULL;
     t.stride = t.bw + 2 * VS_APRON;
-    t.blk = F->use_blocks ? malloc((size_t)F->blk.ny * 8 * F->blk.nvec * sizeof(float)) : NULL;
+    t.blk = F->use_blocks    ? malloc((size_t)F->blk.ny * 8 * F->blk.nvec * sizeof(float))
+            : F->use_skewed ? malloc((size_t)F->skew.ny * 8 * F->skew_maxvec * sizeof(float))
+                            : NULL;
     const int npix = t.tw * t.th;
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
     const int nbr = (int)(F->tile_start[task + 1] - F->tile_start[task]);
@@ -786,7 +866,7 @@ void vs_tile_render(void *arg, int worker, int task)
     sheets = calloc((size_t)R * sheet_floats, sizeof(float));
     ring = malloc((size_t)R * sizeof *ring);
     bbox = malloc((size_t)R * sizeof *bbox);
-    if (!sheets || !ring || !bbox || (multi && !t.blk)) {
+    if (!sheets || !ring || !bbox || ((multi || F->use_skewed) && !t.blk)) {
         atomic_store(&F->error, 1);
         goto done;
     }
