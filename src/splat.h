@@ -29,11 +29,14 @@ typedef struct vs_frame {
     int use_blocks;                  /* separable footprints: voxel at a time with
                                         footprint blocks (src/block.h)           */
     vs_block_geom blk;
-    int use_skewed;                  /* general footprints, orthographic: rows
-                                        from skewed phase tables, one block per
-                                        section (post-gs: row by row)        */
-    vs_block_geom skew;
-    int skew_maxvec;                 /* vectors per skewed block row          */
+    int use_skewed;                  /* general footprints: rows from skewed
+                                        phase tables, one block per section
+                                        (post-gs: row by row)                 */
+    vs_block_geom skew;              /* orthographic: the tables            */
+    vs_block_geom *sheet_skew;       /* perspective: tables per sheet, scaled
+                                        by its depth (ny == 0: none, too large) */
+    int sheet_k0, nsheet_skew;       /* sheet of sheet_skew[0], how many       */
+    int skew_maxvec, skew_maxrows;   /* largest block over the tables in use   */
     vs_shade_lut lut;
     vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;

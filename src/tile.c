@@ -35,6 +35,8 @@ typedef struct section {
     float sc, is;   /* footprint scale (perspective; 1 when orthographic) and
                        its inverse: offsets in pixels times `is` are offsets
                        in the footprint's units (pixels at depth 0)          */
+    const vs_block_geom *g; /* skewed tables at this scale, or NULL: an
+                       exponential per pixel                                 */
 } section;
 
 typedef struct tile_ctx {
@@ -85,7 +87,10 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     sec->cx = x;
     sec->cy = y;
     sec->sc = sec->is = 1.0f;
+    sec->g = t->F->use_skewed ? &t->F->skew : NULL;
     if (t->F->cam.persp) {
+        const int i = k - t->F->sheet_k0;
+        sec->g = i >= 0 && i < t->F->nsheet_skew && t->F->sheet_skew[i].ny > 0 ? &t->F->sheet_skew[i] : NULL;
         const float sk = sheet_scale(t->F, k), cx = (float)t->F->cam.cx, cy = (float)t->F->cam.cy;
         sec->cx = cx + (x - cx) * sk;
         sec->cy = cy + (y - cy) * sk;
@@ -162,7 +167,7 @@ static inline void merge_box(rect *bb, const rect *r)
  * depends on the section and the pixel alone, never on the tile. */
 static int row_footprint_skewed(const tile_ctx *t, const section *sec, int y, int *xa, int *xb, float *cxr)
 {
-    const vs_block_geom *g = &t->F->skew;
+    const vs_block_geom *g = sec->g;
     const float ly = sec->cy - g->ry0, py = ceilf(ly), uy = py - ly;
     const int j = (y + t->oy) - (int)py; /* table row */
     if (j < 0 || j >= g->ny) return 0;
@@ -204,7 +209,7 @@ static int row_footprint_skewed(const tile_ctx *t, const section *sec, int y, in
  * scaled by perspective) an exponential per pixel. */
 static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, int *xb, float *cxr)
 {
-    if (t->F->use_skewed && sec->sc == 1.0f) return row_footprint_skewed(t, sec, y, xa, xb, cxr);
+    if (sec->g) return row_footprint_skewed(t, sec, y, xa, xb, cxr);
     const vs_footprint *fp = t->fp;
     float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er;
     if (!cols_of(t, sec, dy, &er, cxr, xa, xb)) return 0;
@@ -250,7 +255,7 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
 static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb)
 {
     const vs_frame *F = t->F;
-    const vs_block_geom *g = &F->skew;
+    const vs_block_geom *g = sec->g;
     const int ppv = 8 / ch, bs = 8 * F->skew_maxvec;
     int x, y, nvec;
     vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, F->skew_maxvec, t->blk, &x, &y, &nvec);
@@ -539,7 +544,7 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         section sec;
         if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
-        if (F->use_skewed && sec.sc == 1.0f && F->pipeline != VS_PIPELINE_POST_GS) {
+        if (sec.g && F->pipeline != VS_PIPELINE_POST_GS) {
             raster_skewed(t, &sec, e->w, F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, dst, bb);
             continue;
         }
@@ -615,7 +620,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         depth_weights(&F->fp, e->z, opening, e->kl, pl == VS_PIPELINE_POST_GS, D, E);
         for (int k = opening; k <= e->kl; k++) {
             const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f,
-                                 1.0f, 1.0f};
+                                 1.0f, 1.0f, NULL};
             if (!(sec.D > 0.0f)) continue;
             ts->ws->splatted++;
             int slot = (k - kbase) % R;
@@ -797,7 +802,7 @@ void vs_tile_render(void *arg, int worker, int task)
     t.rdy = t.rey ? t.rey + t.bh : NULL;
     t.stride = t.bw + 2 * VS_APRON;
     t.blk = F->use_blocks    ? malloc((size_t)F->blk.ny * 8 * F->blk.nvec * sizeof(float))
-            : F->use_skewed ? malloc((size_t)F->skew.ny * 8 * F->skew_maxvec * sizeof(float))
+            : F->use_skewed ? malloc((size_t)F->skew_maxrows * 8 * F->skew_maxvec * sizeof(float))
                             : NULL;
     const int npix = t.tw * t.th;
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
