@@ -293,7 +293,20 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
             if (a < k0) k0 = a;
             if (c > k1) k1 = c;
         }
+        /* the tables of all sheets stay within 4 M floats (16 MB, and as
+         * many table entries to compute a frame); a close-up beyond that
+         * keeps the exponential per pixel */
+        double floats = 0.0;
         if (k0 <= k1 && (long)k1 - k0 < 65536) {
+            const double det = (double)F.fp.A * F.fp.C - (double)F.fp.B * F.fp.B;
+            for (int k = k0; k <= k1; k++) {
+                const double z = (k + 0.5) * F.fp.slab;
+                const double sc = vs_camera_scale(&F.cam, z > F.cam.near_z ? z : F.cam.near_z);
+                const double nx = 2.0 * sqrt(F.fp.emax / F.fp.A) * sc + 9, ny = 2.0 * sqrt(F.fp.emax * F.fp.A / det) * sc + 1;
+                floats += (VS_BLOCK_PHASES + 1) * (nx + ny);
+            }
+        }
+        if (k0 <= k1 && (long)k1 - k0 < 65536 && floats <= 4.0 * (1 << 20)) {
             F.sheet_skew = calloc((size_t)(k1 - k0 + 1), sizeof *F.sheet_skew);
             if (F.sheet_skew) {
                 F.sheet_k0 = k0;
