@@ -1,6 +1,7 @@
 /* Building the relevant-voxel list: an in-range mask, dilated by the seam
  * width with separable running maxima, then compacted in k, j, i order. */
 #include "relevant.h"
+#include "pool.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,40 +29,71 @@ static int in_alpha_range(const vs_classify *c, double v)
 /* OR-dilate a byte mask of flag bits by r voxels in a box (separable: one
  * pass per axis).  Each pass ORs whole contiguous runs — rows for x, rows of
  * neighbouring rows for y, planes of neighbouring planes for z — so the
- * compiler vectorises it and memory is read in order.  `tmp` holds a copy
- * of one plane (x, y passes) or of the whole mask (z pass). */
+ * compiler vectorises it and memory is read in order.  `tmp` (as large as
+ * the mask) holds the copies the passes read. */
 static void or_into(uint8_t *dst, const uint8_t *src, size_t n)
 {
     for (size_t i = 0; i < n; i++) dst[i] |= src[i];
 }
 
-static void dilate(uint8_t *m, const int d[3], int r, uint8_t *tmp)
+/* The passes run on the pool, one task per plane: the x and y passes only
+ * touch their own plane (tmp holds a copy of each plane at its own place),
+ * the z pass reads a copy of the whole mask. */
+typedef struct dilate_job {
+    uint8_t *m, *tmp;
+    const int *d;
+    int r;
+} dilate_job;
+
+static void dilate_xy(void *arg, int worker, int z)
+{
+    (void)worker;
+    const dilate_job *J = arg;
+    const int *d = J->d;
+    const size_t row = (size_t)d[0], plane = row * d[1];
+    uint8_t *p = J->m + (size_t)z * plane, *t = J->tmp + (size_t)z * plane;
+    /* x: within each row, shifted copies */
+    memcpy(t, p, plane);
+    for (size_t o = 0; o < plane; o += row)
+        for (int sft = 1; sft <= J->r && (size_t)sft < row; sft++) {
+            or_into(p + o + sft, t + o, row - sft);
+            or_into(p + o, t + o + sft, row - sft);
+        }
+    /* y: within the plane, neighbouring rows */
+    memcpy(t, p, plane);
+    for (int sft = 1; sft <= J->r && sft < d[1]; sft++) {
+        or_into(p + sft * row, t, plane - sft * row);
+        or_into(p, t + sft * row, plane - sft * row);
+    }
+}
+
+static void copy_plane(void *arg, int worker, int z)
+{
+    (void)worker;
+    const dilate_job *J = arg;
+    const size_t plane = (size_t)J->d[0] * J->d[1];
+    memcpy(J->tmp + (size_t)z * plane, J->m + (size_t)z * plane, plane);
+}
+
+static void dilate_z(void *arg, int worker, int z)
+{
+    (void)worker;
+    const dilate_job *J = arg;
+    const size_t plane = (size_t)J->d[0] * J->d[1];
+    uint8_t *p = J->m + (size_t)z * plane;
+    for (int sft = 1; sft <= J->r; sft++) {
+        if (z - sft >= 0) or_into(p, J->tmp + (size_t)(z - sft) * plane, plane);
+        if (z + sft < J->d[2]) or_into(p, J->tmp + (size_t)(z + sft) * plane, plane);
+    }
+}
+
+static void dilate(struct vs_pool *pool, uint8_t *m, const int d[3], int r, uint8_t *tmp)
 {
     if (r <= 0) return;
-    const size_t row = (size_t)d[0], plane = row * d[1], n = plane * d[2];
-    /* x: within each row, shifted copies */
-    for (size_t o = 0; o < n; o += row) {
-        memcpy(tmp, m + o, row);
-        for (int sft = 1; sft <= r && (size_t)sft < row; sft++) {
-            or_into(m + o + sft, tmp, row - sft);
-            or_into(m + o, tmp + sft, row - sft);
-        }
-    }
-    /* y: within each plane, neighbouring rows */
-    for (int z = 0; z < d[2]; z++) {
-        uint8_t *p = m + (size_t)z * plane;
-        memcpy(tmp, p, plane);
-        for (int sft = 1; sft <= r && sft < d[1]; sft++) {
-            or_into(p + sft * row, tmp, plane - sft * row);
-            or_into(p, tmp + sft * row, plane - sft * row);
-        }
-    }
-    /* z: neighbouring planes */
-    memcpy(tmp, m, n);
-    for (int sft = 1; sft <= r && sft < d[2]; sft++) {
-        or_into(m + sft * plane, tmp, n - sft * plane);
-        or_into(m, tmp + sft * plane, n - sft * plane);
-    }
+    dilate_job J = {m, tmp, d, r};
+    vs_pool_run(pool, d[2], dilate_xy, &J);
+    vs_pool_run(pool, d[2], copy_plane, &J);
+    vs_pool_run(pool, d[2], dilate_z, &J);
 }
 
 enum { BELOW = 1, INSIDE = 2, ABOVE = 4 };
@@ -82,8 +114,127 @@ static void *take(void **old, size_t bytes)
     return p;
 }
 
-static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c, int seam,
-                       int with_grad, vs_relevant_cache *rc, vs_relevant_cache *old)
+/* The per-voxel passes of a rebuild, on the pool: classification and the
+ * in-range test in chunks of planes; counting and filling per slab of
+ * bricks (VS_BRICK planes), whose bricks no other slab touches, so the list
+ * is the same for any thread count. */
+typedef struct build_job {
+    const struct vs_volume *vol;
+    const int *d;
+    const uint8_t *lut8;   /* class of each u8 / u16 / i16 value (NULL: f32) */
+    const vs_classify *c;
+    uint8_t *mask;
+    int nb[3];
+    uint32_t *pos;         /* per brick: count, then next slot               */
+    size_t *slab_count;    /* voxels per slab of bricks                      */
+    vs_voxel *vox;
+    float *grad;
+    int with_grad;
+    int combine;           /* pass 2 of the seam rule, else in-range only    */
+} build_job;
+
+static void classify_planes(void *arg, int worker, int z)
+{
+    (void)worker;
+    const build_job *J = arg;
+    const size_t plane = (size_t)J->d[0] * J->d[1], i0 = (size_t)z * plane;
+    uint8_t *mask = J->mask + i0;
+    switch (J->vol->type) {
+    case VS_U8: {
+        const uint8_t *p = (const uint8_t *)J->vol->data + i0;
+        for (size_t i = 0; i < plane; i++) mask[i] = J->lut8[p[i]];
+    } break;
+    case VS_U16: {
+        const uint16_t *p = (const uint16_t *)J->vol->data + i0;
+        for (size_t i = 0; i < plane; i++) mask[i] = J->lut8[p[i]];
+    } break;
+    case VS_I16: {
+        const int16_t *p = (const int16_t *)J->vol->data + i0;
+        for (size_t i = 0; i < plane; i++) mask[i] = J->lut8[p[i] + 32768];
+    } break;
+    default: {
+        const float *p = (const float *)J->vol->data + i0;
+        for (size_t i = 0; i < plane; i++) mask[i] = class_of(J->c, p[i]);
+    } break;
+    }
+}
+
+static void finish_planes(void *arg, int worker, int z)
+{
+    (void)worker;
+    const build_job *J = arg;
+    const size_t plane = (size_t)J->d[0] * J->d[1];
+    uint8_t *mask = J->mask + (size_t)z * plane;
+    if (J->combine)
+        for (size_t i = 0; i < plane; i++)
+            mask[i] = (mask[i] & INSIDE) || (mask[i] & (BELOW | ABOVE)) == (BELOW | ABOVE);
+    else
+        for (size_t i = 0; i < plane; i++) mask[i] = (mask[i] & INSIDE) != 0;
+}
+
+static void count_slab(void *arg, int worker, int bk)
+{
+    (void)worker;
+    const build_job *J = arg;
+    const int *d = J->d, *nb = J->nb;
+    const int k1 = (bk + 1) * VS_BRICK < d[2] ? (bk + 1) * VS_BRICK : d[2];
+    size_t count = 0;
+    for (int k = bk * VS_BRICK; k < k1; k++)
+        for (int j = 0; j < d[1]; j++) {
+            const uint8_t *m = J->mask + ((size_t)k * d[1] + j) * d[0];
+            uint32_t *pb = J->pos + ((size_t)bk * nb[1] + j / VS_BRICK) * nb[0];
+            for (int i = 0; i < d[0]; i++)
+                if (m[i]) {
+                    pb[i / VS_BRICK]++;
+                    count++;
+                }
+        }
+    J->slab_count[bk] = count;
+}
+
+static void fill_slab(void *arg, int worker, int bk)
+{
+    (void)worker;
+    const build_job *J = arg;
+    const struct vs_volume *vol = J->vol;
+    const int *d = J->d, *nb = J->nb;
+    const int k1 = (bk + 1) * VS_BRICK < d[2] ? (bk + 1) * VS_BRICK : d[2];
+    for (int k = bk * VS_BRICK; k < k1; k++)
+        for (int j = 0; j < d[1]; j++) {
+            size_t idx = ((size_t)k * d[1] + j) * d[0];
+            uint32_t *pb = J->pos + ((size_t)bk * nb[1] + j / VS_BRICK) * nb[0];
+            for (int i = 0; i < d[0]; i++, idx++) {
+                if (!J->mask[idx]) continue;
+                size_t o = pb[i / VS_BRICK]++;
+                double v = vs_volume_at(vol, idx);
+                vs_voxel *vx = &J->vox[o];
+                vx->i = (uint16_t)i;
+                vx->j = (uint16_t)j;
+                vx->k = (uint16_t)k;
+                vx->pad = 0;
+                vx->value = isfinite(v) ? (float)v : 0.0f;
+                if (J->with_grad) {
+                    /* central differences on the grid (one-sided at borders) */
+                    const int p[3] = {i, j, k};
+                    const size_t st[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
+                    for (int a = 0; a < 3; a++) {
+                        int lo = p[a] > 0 ? 1 : 0, hi = p[a] < d[a] - 1 ? 1 : 0;
+                        double g = 0.0;
+                        if (lo + hi > 0) {
+                            double fh = vs_volume_at(vol, idx + hi * st[a]);
+                            double fl = vs_volume_at(vol, idx - lo * st[a]);
+                            g = (fh - fl) / (lo + hi);
+                            if (!isfinite(g)) g = 0.0;
+                        }
+                        J->grad[3 * o + a] = (float)g;
+                    }
+                }
+            }
+        }
+}
+
+static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
+                       int seam, int with_grad, vs_relevant_cache *rc, vs_relevant_cache *old)
 {
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
@@ -91,32 +242,21 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
     uint8_t *mask = take(old ? (void **)&old->scratch : &none, 2 * n); /* mask + dilation scratch */
     if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     uint8_t *line = mask + n;
+    build_job J = {vol, d, NULL, c, mask, {0, 0, 0}, NULL, NULL, NULL, NULL, with_grad, 0};
     /* integer volumes: classify each possible value once */
-    if (vol->type == VS_U8) {
-        uint8_t lut[256];
-        for (int v = 0; v < 256; v++) lut[v] = class_of(c, v);
-        const uint8_t *p = vol->data;
-        for (size_t i = 0; i < n; i++) mask[i] = lut[p[i]];
-    } else if (vol->type == VS_U16 || vol->type == VS_I16) {
-        uint8_t *lut = malloc(65536);
+    uint8_t *lut = NULL;
+    if (vol->type != VS_F32) {
+        const int nv = vol->type == VS_U8 ? 256 : 65536, off = vol->type == VS_I16 ? 32768 : 0;
+        lut = malloc((size_t)nv);
         if (!lut) {
             free(mask);
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
         }
-        int off = vol->type == VS_I16 ? 32768 : 0;
-        for (int v = 0; v < 65536; v++) lut[v] = class_of(c, v - off);
-        if (vol->type == VS_U16) {
-            const uint16_t *p = vol->data;
-            for (size_t i = 0; i < n; i++) mask[i] = lut[p[i]];
-        } else {
-            const int16_t *p = vol->data;
-            for (size_t i = 0; i < n; i++) mask[i] = lut[p[i] + 32768];
-        }
-        free(lut);
-    } else {
-        const float *p = vol->data;
-        for (size_t i = 0; i < n; i++) mask[i] = class_of(c, p[i]);
+        for (int v = 0; v < nv; v++) lut[v] = class_of(c, v - off);
+        J.lut8 = lut;
     }
+    vs_pool_run(pool, d[2], classify_planes, &J);
+    free(lut);
     if (in_alpha_range(c, 0.0) && seam > 0) {
         /* Empty space is visible (opacity at 0 is > 0): a voxel left out
          * would read as 0 and become opaque, so nothing may be left out. */
@@ -127,12 +267,12 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
          * range or values on both sides of it (a thin ramp can fall between
          * grid points).  Those voxels, dilated by the seam, are what the
          * kernel needs to reconstruct every point where opacity is > 0. */
-        dilate(mask, d, 1, line);
-        for (size_t i = 0; i < n; i++)
-            mask[i] = (mask[i] & INSIDE) || (mask[i] & (BELOW | ABOVE)) == (BELOW | ABOVE);
-        dilate(mask, d, seam, line);
+        dilate(pool, mask, d, 1, line);
+        J.combine = 1;
+        vs_pool_run(pool, d[2], finish_planes, &J);
+        dilate(pool, mask, d, seam, line);
     } else {
-        for (size_t i = 0; i < n; i++) mask[i] = (mask[i] & INSIDE) != 0;
+        vs_pool_run(pool, d[2], finish_planes, &J);
     }
     /* Compact brick by brick: count per brick, prefix sums, fill (the fill
      * walks the grid in k, j, i order, so each brick is in that order too). */
@@ -140,18 +280,20 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
                        (d[2] + VS_BRICK - 1) / VS_BRICK};
     size_t nbt = (size_t)nb[0] * nb[1] * nb[2];
     uint32_t *pos = calloc(nbt + 1, sizeof *pos);
-    if (!pos) {
+    size_t *slab_count = calloc((size_t)nb[2], sizeof *slab_count);
+    if (!pos || !slab_count) {
         free(mask);
+        free(pos);
+        free(slab_count);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     }
-    size_t count = 0, idx = 0, nonempty = 0;
-    for (int k = 0; k < d[2]; k++)
-        for (int j = 0; j < d[1]; j++)
-            for (int i = 0; i < d[0]; i++, idx++)
-                if (mask[idx]) {
-                    pos[((size_t)(k / VS_BRICK) * nb[1] + j / VS_BRICK) * nb[0] + i / VS_BRICK]++;
-                    count++;
-                }
+    memcpy(J.nb, nb, sizeof J.nb);
+    J.pos = pos;
+    J.slab_count = slab_count;
+    vs_pool_run(pool, nb[2], count_slab, &J);
+    size_t count = 0, nonempty = 0;
+    for (int bk = 0; bk < nb[2]; bk++) count += slab_count[bk];
+    free(slab_count);
     if (count > UINT32_MAX) {
         free(mask);
         free(pos);
@@ -193,35 +335,9 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
                 }
                 run += nvox;
             }
-    idx = 0;
-    for (int k = 0; k < d[2]; k++)
-        for (int j = 0; j < d[1]; j++)
-            for (int i = 0; i < d[0]; i++, idx++) {
-                if (!mask[idx]) continue;
-                size_t o = pos[((size_t)(k / VS_BRICK) * nb[1] + j / VS_BRICK) * nb[0] + i / VS_BRICK]++;
-                double v = vs_volume_at(vol, idx);
-                vox[o].i = (uint16_t)i;
-                vox[o].j = (uint16_t)j;
-                vox[o].k = (uint16_t)k;
-                vox[o].pad = 0;
-                vox[o].value = isfinite(v) ? (float)v : 0.0f;
-                if (with_grad) {
-                    /* central differences on the grid (one-sided at borders) */
-                    const int p[3] = {i, j, k};
-                    const size_t st[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
-                    for (int a = 0; a < 3; a++) {
-                        int lo = p[a] > 0 ? 1 : 0, hi = p[a] < d[a] - 1 ? 1 : 0;
-                        double g = 0.0;
-                        if (lo + hi > 0) {
-                            double fh = vs_volume_at(vol, idx + hi * st[a]);
-                            double fl = vs_volume_at(vol, idx - lo * st[a]);
-                            g = (fh - fl) / (lo + hi);
-                            if (!isfinite(g)) g = 0.0;
-                        }
-                        grad[3 * o + a] = (float)g;
-                    }
-                }
-            }
+    J.vox = vox;
+    J.grad = grad;
+    vs_pool_run(pool, nb[2], fill_slab, &J);
     free(pos);
     rc->nbricks = nbk;
     rc->bricks = bricks;
@@ -232,7 +348,7 @@ static vs_status build(vs_context *ctx, const struct vs_volume *vol, const vs_cl
     return VS_OK;
 }
 
-vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c,
+vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
                           int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt)
 {
     vs_relevant_cache *rc = ctx->relevant;
@@ -251,7 +367,7 @@ vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     }
     double t0 = vs_now_ms();
-    vs_status st = build(ctx, vol, c, seam, with_grad, rc, old);
+    vs_status st = build(ctx, pool, vol, c, seam, with_grad, rc, old);
     vs_relevant_cache_free(old); /* what build did not take over */
     if (st != VS_OK) {
         vs_relevant_cache_free(rc);

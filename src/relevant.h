@@ -45,7 +45,10 @@ typedef struct vs_relevant_cache {
 /* Returns the cached list if still valid, else rebuilds it.  *rebuilt tells
  * which happened.  with_grad: also store grid central-difference gradients
  * (pre-shaded pipelines shade voxels). */
-vs_status vs_relevant_get(vs_context *ctx, const struct vs_volume *vol, const vs_classify *c,
+struct vs_pool;
+/* The rebuild runs on `pool` (NULL: on the calling thread); the list is the
+ * same for any thread count. */
+vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
                           int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
 /* Does the classification give value 0 (empty space) a non-zero opacity?

@@ -249,10 +249,10 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     int with_grad = s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA;
     F.clip_to_volume = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
     int rebuilt = 0;
-    double t_rel = vs_now_ms();
-    if ((rc = vs_relevant_get(ctx, vol, F.cls, seam, with_grad, &F.rel, &rebuilt)) != VS_OK) goto fail;
-    double ms_relevant = rebuilt ? vs_now_ms() - t_rel : 0.0;
     if ((rc = ensure_pool(ctx, s)) != VS_OK) goto fail;
+    double t_rel = vs_now_ms();
+    if ((rc = vs_relevant_get(ctx, ctx->pool, vol, F.cls, seam, with_grad, &F.rel, &rebuilt)) != VS_OK) goto fail;
+    double ms_relevant = rebuilt ? vs_now_ms() - t_rel : 0.0;
     int nthreads = vs_pool_threads(ctx->pool);
 
     double t_setup = vs_now_ms();
