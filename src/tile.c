@@ -36,7 +36,8 @@ typedef struct section {
                        its inverse: offsets in pixels times `is` are offsets
                        in the footprint's units (pixels at depth 0)          */
     const vs_block_geom *g; /* skewed tables at this scale, or NULL: an
-                       exponential per pixel                                 */
+                       exponential per pixel (always for post-gs, whose
+                       z-gradient splat mixes channels, so no block serves) */
 } section;
 
 typedef struct tile_ctx {
@@ -160,56 +161,11 @@ static inline void merge_box(rect *bb, const rect *r)
     if (r->y1 > bb->y1) bb->y1 = r->y1;
 }
 
-/* Row y of a footprint from the skewed phase tables (src/block.h): the row
- * weight at the section's vertical phase times the column weights at the
- * row's own horizontal phase, both interpolated between table phases as
- * footprint blocks are; exactly 0 outside the kernel's radius.  Every value
- * depends on the section and the pixel alone, never on the tile. */
-static int row_footprint_skewed(const tile_ctx *t, const section *sec, int y, int *xa, int *xb, float *cxr)
-{
-    const vs_block_geom *g = sec->g;
-    const float ly = sec->cy - g->ry0, py = ceilf(ly), uy = py - ly;
-    const int j = (y + t->oy) - (int)py; /* table row */
-    if (j < 0 || j >= g->ny) return 0;
-    float sy = uy * (float)VS_BLOCK_PHASES;
-    int qy = (int)sy;
-    if (qy > VS_BLOCK_PHASES - 1) qy = VS_BLOCK_PHASES - 1;
-    const float fy = sy - (float)qy;
-    const float *r0 = g->roww + (size_t)qy * g->ny;
-    const float rw = r0[j] + fy * (r0[g->ny + j] - r0[j]);
-    if (!(rw > 0.0f)) return 0;
-    const float c = sec->cx + t->fp->row_shift * ((float)j + uy - g->ry0);
-    const float lx = c - g->rx0, px = ceilf(lx), ux = px - lx;
-    float sx = ux * (float)VS_BLOCK_PHASES;
-    int qx = (int)sx;
-    if (qx > VS_BLOCK_PHASES - 1) qx = VS_BLOCK_PHASES - 1;
-    const float fx = sx - (float)qx;
-    const float *c0 = g->colw + (size_t)qx * g->bx, *c1 = c0 + g->bx;
-    const int first = (int)px - t->ox; /* buffer column of table column 0 */
-    int a = first < 0 ? 0 : first, b = first + g->nx - 1;
-    if (b > t->bw - 1) b = t->bw - 1;
-    float *ex = t->ex;
-    const float thr = g->thr;
-    for (int x = a; x <= b; x++) {
-        const int i = x - first;
-        const float h = (c0[i] + fx * (c1[i] - c0[i])) * rw;
-        ex[x] = h > thr ? h : 0.0f;
-    }
-    while (a <= b && ex[a] == 0.0f) a++; /* keep the touched box tight */
-    while (b >= a && ex[b] == 0.0f) b--;
-    *xa = a;
-    *xb = b;
-    *cxr = c;
-    return a <= b;
-}
-
-/* General (sheared or rotated-ellipse) footprints: the weights of row y
- * into t->ex[xa..xb] and the row's centre in pixels; 0 if the row misses
- * the footprint.  From the skewed tables when orthographic, else (sections
- * scaled by perspective) an exponential per pixel. */
+/* General (sheared or rotated-ellipse) footprints without skewed tables:
+ * the weights of row y into t->ex[xa..xb] and the row's centre in pixels,
+ * an exponential per pixel; 0 if the row misses the footprint. */
 static int row_footprint(const tile_ctx *t, const section *sec, int y, int *xa, int *xb, float *cxr)
 {
-    if (sec->g) return row_footprint_skewed(t, sec, y, xa, xb, cxr);
     const vs_footprint *fp = t->fp;
     float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er;
     if (!cols_of(t, sec, dy, &er, cxr, xa, xb)) return 0;
@@ -289,13 +245,13 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
     float A = fp->A, B = fp->B, rk = fp->row_k;
     float qzx = (float)fp->Qzx, qzy = (float)fp->Qzy, rs = fp->row_shift;
     for (int y = ya; y <= yb; y++) {
-        float dy = ((float)(y + t->oy) - sec->cy) * sec->is, cxr;
+        float dy = ((float)(y + t->oy) - sec->cy) * sec->is, er, cxr;
         int xa, xb;
-        if (!row_footprint(t, sec, y, &xa, &xb, &cxr)) continue;
+        if (!cols_of(t, sec, dy, &er, &cxr, &xa, &xb)) continue;
         float *row = buf + (size_t)y * t->stride * 4;
         for (int x = xa; x <= xb; x++) {
             float dx = ((float)(x + t->ox) - cxr) * sec->is;
-            float h = t->ex[x];
+            float h = vs_fp_exp(fp, er + A * dx * dx);
             float dxs = dx + rs * dy; /* x offset from the shifted centre */
             float *p = row + 4 * x;
             p[0] += wD * h;
@@ -544,7 +500,7 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         section sec;
         if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
-        if (sec.g && F->pipeline != VS_PIPELINE_POST_GS) {
+        if (sec.g) {
             raster_skewed(t, &sec, e->w, F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, dst, bb);
             continue;
         }
