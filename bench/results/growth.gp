@@ -10,7 +10,7 @@ set grid
 set key top left
 set ylabel 'frame ms'
 set xlabel 'relevant voxels (sphere:N, 256^2)'
-set title 'slope 0.38'
+set title 'slope 0.44'
 plot 'growth.dat' index 0 using 1:2 with linespoints pt 7 title 'frame time'
 set xlabel 'pixels (sphere:128)'
 set title 'slope 0.46'
