@@ -25,3 +25,26 @@ void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t b
                              _mm256_add_ps(_mm256_loadu_ps(d + 8 * v), _mm256_mul_ps(w, _mm256_loadu_ps(b + 8 * v))));
     }
 }
+
+/* Two pixels a register: each 128-bit lane is one pixel, so in-lane
+ * shuffles broadcast its h, h dx, h dy; products and sums in the scalar
+ * reference's order. */
+void vs_splat_block_mix_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                             const float m[12])
+{
+    const __m256 m0 = _mm256_setr_ps(m[0], m[3], m[6], m[9], m[0], m[3], m[6], m[9]);
+    const __m256 m1 = _mm256_setr_ps(m[1], m[4], m[7], m[10], m[1], m[4], m[7], m[10]);
+    const __m256 m2 = _mm256_setr_ps(m[2], m[5], m[8], m[11], m[2], m[5], m[8], m[11]);
+    for (int r = 0; r < rows; r++) {
+        float *d = dst + r * ds;
+        const float *b = blk + r * bs;
+        for (int v = 0; v < nvec; v++) {
+            const __m256 x = _mm256_loadu_ps(b + 8 * v);
+            const __m256 h = _mm256_shuffle_ps(x, x, 0x00), hx = _mm256_shuffle_ps(x, x, 0x55),
+                         hy = _mm256_shuffle_ps(x, x, 0xAA);
+            const __m256 t = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(m0, h), _mm256_mul_ps(m1, hx)),
+                                           _mm256_mul_ps(m2, hy));
+            _mm256_storeu_ps(d + 8 * v, _mm256_add_ps(_mm256_loadu_ps(d + 8 * v), t));
+        }
+    }
+}

@@ -28,6 +28,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->splat_row_gs = vs_splat_row_gs_scalar;
     k->composite = vs_composite_scalar;
     k->splat_block = vs_splat_block_scalar;
+    k->splat_block_mix = vs_splat_block_mix_scalar;
     k->classify_cd = vs_classify_cd_scalar;
     k->classify_gs = vs_classify_gs_scalar;
     k->shade_lut = vs_shade_lut_scalar;
@@ -37,12 +38,14 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->splat_row4 = vs_splat_row4_sse4;
         k->splat_row_gs = vs_splat_row_gs_sse4;
         k->splat_block = vs_splat_block_sse4;
+        k->splat_block_mix = vs_splat_block_mix_sse4;
     }
     if (cap >= VS_ISA_AVX2) {
         k->isa = VS_ISA_AVX2;
         k->splat_row4 = vs_splat_row4_avx2;
         k->splat_row_gs = vs_splat_row_gs_avx2;
         k->splat_block = vs_splat_block_avx2;
+        k->splat_block_mix = vs_splat_block_mix_avx2; /* also for avx512 */
         k->classify_cd = vs_classify_cd_avx2;
         k->classify_gs = vs_classify_gs_avx2;
         k->shade_lut = vs_shade_lut_avx2;

@@ -81,7 +81,21 @@ static inline int phase_row(float u, float *f)
     return q;
 }
 
-void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, float cy, int ch, int maxvec,
+/* Gradient-splat layout: channels 1 and 2 of every pixel become h times
+ * its offset from the centre, in pixels. */
+static void gradient_layout(float *blk, int stride, int rows, int width, int x, int y, float cx, float cy)
+{
+    for (int j = 0; j < rows; j++) {
+        float *row = blk + (size_t)j * stride;
+        const float dy = (float)(y + j) - cy;
+        for (int i = 0; i < width; i++) {
+            row[4 * i + 1] *= (float)(x + i) - cx;
+            row[4 * i + 2] *= dy;
+        }
+    }
+}
+
+void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, float cy, int ch, int grad, int maxvec,
                            float *blk, int *x, int *y, int *nvec)
 {
     int xs[VS_BLOCK_MAX_SPAN];
@@ -89,10 +103,9 @@ void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, fl
     const float ly = cy - g->ry0, py = ceilf(ly), uy = py - ly;
     float fy;
     const float *r0 = g->roww + (size_t)phase_row(uy, &fy) * g->ny;
-    /* each row's centre and first pixel (the row's offset from the centre
-     * is exactly as row_footprint_skewed computes it) */
-    /* the rows' left edges lx are monotonic in the row, so equal ends mean
-     * every row has the same one: no skew (axis-aligned, only sheared) */
+    /* each row's centre and first pixel; the rows' left edges lx are
+     * monotonic in the row, so equal ends mean every row has the same one:
+     * no skew (axis-aligned, only sheared) */
     const float lx0 = cx + row_shift * (uy - g->ry0) - g->rx0;
     const float lx1 = cx + row_shift * ((float)(g->ny - 1) + uy - g->ry0) - g->rx0;
     const int uniform = lx0 == lx1;
@@ -136,6 +149,7 @@ void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, fl
                 }
             }
         }
+        if (grad && ch == 4) gradient_layout(blk, stride, g->ny, width, xmin, (int)py, cx, cy);
         return;
     }
     for (int j = 0; j < g->ny; j++) {
@@ -164,6 +178,7 @@ void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, fl
             }
         }
     }
+    if (grad && ch == 4) gradient_layout(blk, stride, g->ny, width, xmin, (int)py, cx, cy);
 }
 
 /* out[i] = t0[i] + f (t1[i] - t0[i]) for i in [a, b) */

@@ -42,10 +42,11 @@ int vs_block_skewed_nvec(const vs_block_geom *g, float row_shift, int ch);
 /* The block of a general footprint (skewed tables) centred at image
  * position (cx, cy): g->ny rows, each placed at its own column phase, laid
  * into one rectangle of ch-float pixels (zeros where a row does not reach;
- * ch = 4 repeats the weight in every channel), rows 8 maxvec floats apart.
- * Out: image column x and row y of the rectangle's first pixel and its
- * vectors per row (<= maxvec). */
-void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, float cy, int ch, int maxvec,
+ * ch = 4 repeats the weight h in every channel, or with grad holds h,
+ * h dx, h dy, h, the offsets from the centre in pixels), rows 8 maxvec
+ * floats apart.  Out: image column x and row y of the rectangle's first
+ * pixel and its vectors per row (<= maxvec). */
+void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, float cy, int ch, int grad, int maxvec,
                            float *blk, int *x, int *y, int *nvec);
 
 /* Where one voxel's block lands: image column/row of its first pixel and

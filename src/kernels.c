@@ -142,3 +142,16 @@ void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstri
         c[2] = rgb[2] * d + sp;
     }
 }
+
+void vs_splat_block_mix_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                               const float m[12])
+{
+    for (int r = 0; r < rows; r++) {
+        float *d = dst + r * ds;
+        const float *b = blk + r * bs;
+        for (int p = 0; p < 2 * nvec; p++) {
+            const float h = b[4 * p], hx = b[4 * p + 1], hy = b[4 * p + 2];
+            for (int c = 0; c < 4; c++) d[4 * p + c] += (m[3 * c] * h + m[3 * c + 1] * hx) + m[3 * c + 2] * hy;
+        }
+    }
+}

@@ -53,6 +53,12 @@ typedef struct vs_kernels {
      *   dst[r ds + i] += w8[i % 8] * blk[r bs + i], r < rows, i < 8 nvec */
     void (*splat_block)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                         const float w8[8]);
+    /* a gradient-splat block (4 floats a pixel: h, h dx, h dy, h) into a
+     * 4-channel sheet, mixing channels with m (4 rows of 3):
+     *   dst[r ds + 4p + c] += (m[3c] h + m[3c+1] hdx) + m[3c+2] hdy,
+     * r < rows, p < 2 nvec */
+    void (*splat_block_mix)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                            const float m[12]);
     /* post-cd step 1 over one span of a density sheet q (neighbour rows at
      * +-stride, sheets before/after qp, qn): alpha[i] = opacity table at
      * q[i] (linear interpolation), and for EVERY i (read only where
@@ -76,6 +82,12 @@ void vs_splat_row1_scalar(float *row, const float *ex, float w, int n);
 void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n);
 void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n);
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);
+void vs_splat_block_mix_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                               const float m[12]);
+void vs_splat_block_mix_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                             const float m[12]);
+void vs_splat_block_mix_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                             const float m[12]);
 void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                            const float w8[8]);
 

@@ -226,12 +226,10 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
                 goto fail;
             }
             F.use_blocks = 1;
-        } else if (!F.cam.persp && s->pipeline != VS_PIPELINE_POST_GS && nx <= VS_BLOCK_MAX_SPAN &&
-                   ny <= VS_BLOCK_MAX_SPAN) {
+        } else if (!F.cam.persp && nx <= VS_BLOCK_MAX_SPAN && ny <= VS_BLOCK_MAX_SPAN) {
             /* sheet at a time, one block per section from skewed phase
              * tables instead of an exponential per pixel (without the
-             * tables, e.g. when out of memory, or for post-gs, whose
-             * z-gradient splat mixes channels, the exponential path serves) */
+             * tables, e.g. when out of memory, the exponential path serves) */
             F.use_skewed = vs_block_setup_skewed(&F.skew, &F.fp);
             F.skew_maxvec = vs_block_skewed_nvec(&F.skew, F.fp.row_shift,
                                                  s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4);
@@ -284,7 +282,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
      * brick order inside each tile for any thread count), fill */
     J.fill = 0;
     vs_pool_run(ctx->pool, J.nchunks, bin_task, &J);
-    if (F.cam.persp && !F.use_blocks && s->pipeline != VS_PIPELINE_POST_GS) {
+    if (F.cam.persp && !F.use_blocks) {
         /* perspective: a sheet's footprints all share its depth's scale, so
          * each sheet the bricks reach gets skewed tables of its own */
         const float slab = (float)F.fp.slab, rz = (float)F.fp.rz;

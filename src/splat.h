@@ -29,8 +29,8 @@ typedef struct vs_frame {
     int use_blocks;                  /* separable footprints: voxel at a time with
                                         footprint blocks (src/block.h)           */
     vs_block_geom blk;
-    int use_skewed;                  /* general footprints (not post-gs): one
-                                        block per section from skewed tables  */
+    int use_skewed;                  /* general footprints: one block per
+                                        section from skewed tables            */
     vs_block_geom skew;              /* orthographic: the tables            */
     vs_block_geom *sheet_skew;       /* perspective: tables per sheet, scaled
                                         by its depth (ny == 0: none, too large) */

@@ -36,8 +36,7 @@ typedef struct section {
                        its inverse: offsets in pixels times `is` are offsets
                        in the footprint's units (pixels at depth 0)          */
     const vs_block_geom *g; /* skewed tables at this scale, or NULL: an
-                       exponential per pixel (always for post-gs, whose
-                       z-gradient splat mixes channels, so no block serves) */
+                       exponential per pixel                                 */
 } section;
 
 typedef struct tile_ctx {
@@ -206,26 +205,45 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
 
 /* A general footprint as one skewed block (src/block.h) added by the
  * block kernel: density (post-cd, ch 1) or four channels with their own
- * weights (pre, post-alpha).  Only the rows inside the buffer and the
- * vectors overlapping it are added; a vector may spill into the apron. */
+ * weights (pre, post-alpha), or for post-gs (h, h dx, h dy, h) mixed into
+ * density and gradient splats by splat_block_mix.  Only the rows inside the
+ * buffer and the vectors overlapping it are added; a vector may spill into
+ * the apron. */
 static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb)
 {
     const vs_frame *F = t->F;
     const vs_block_geom *g = sec->g;
-    const int ppv = 8 / ch, bs = 8 * F->skew_maxvec;
+    const int ppv = 8 / ch, bs = 8 * F->skew_maxvec, gs = F->pipeline == VS_PIPELINE_POST_GS;
     int x, y, nvec;
-    vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, F->skew_maxvec, t->blk, &x, &y, &nvec);
+    vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, gs, F->skew_maxvec, t->blk, &x, &y, &nvec);
     const int by = y - t->oy, bx = x - t->ox;
     const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
     const int v0 = bx < 0 ? -bx / ppv : 0;
     int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
     if (v1 > nvec) v1 = nvec;
     if (j0 >= j1 || v0 >= v1) return;
-    float w8[8];
-    for (int c = 0; c < 8; c++) w8[c] = w4[ch == 1 ? 0 : c % 4] * sec->D;
     const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
     const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
-    F->kern.splat_block(dst + off, ds, t->blk + (size_t)j0 * bs + 8 * v0, bs, j1 - j0, v1 - v0, w8);
+    const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
+    if (gs) {
+        /* raster_gs's splats with offsets in pixels (dxs from the centre,
+         * dy) turned into footprint units by `is`; the row-centre offset
+         * is dxs - row_shift dy:
+         *   q += wD h,  gx += -2 wD A dx,  gy += -2 wD (B dx + k dy),
+         *   gz += h wE - 2 wD (Qzx dxs + Qzy dy) */
+        const vs_footprint *fp = t->fp;
+        const float wD = w4[0] * sec->D, wE = w4[0] * sec->E, is = sec->is, rs = fp->row_shift;
+        const float a = -2.0f * wD * fp->A * is, b = -2.0f * wD * fp->B * is, k = -2.0f * wD * fp->row_k * is;
+        const float m[12] = {wD, 0.0f, 0.0f,
+                             0.0f, a, -a * rs,
+                             0.0f, b, -b * rs + k,
+                             wE, -2.0f * wD * (float)fp->Qzx * is, -2.0f * wD * (float)fp->Qzy * is};
+        F->kern.splat_block_mix(dst + off, ds, src, bs, j1 - j0, v1 - v0, m);
+    } else {
+        float w8[8];
+        for (int c = 0; c < 8; c++) w8[c] = w4[ch == 1 ? 0 : c % 4] * sec->D;
+        F->kern.splat_block(dst + off, ds, src, bs, j1 - j0, v1 - v0, w8);
+    }
     const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
     merge_box(bb, &box);
 }

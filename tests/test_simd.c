@@ -96,6 +96,50 @@ static void check_block(const char *isa, vs_splat_block_fn fn)
 }
 
 
+/* Gradient-splat blocks mixed into 4-channel sheets: same sizes and
+ * offsets as check_block, random mixing matrices and one with zero rows;
+ * returns the failures (so a wrong kernel can be shown to fail). */
+typedef void (*block_mix_fn)(float *, ptrdiff_t, const float *, ptrdiff_t, int, int, const float *);
+static int check_block_mix(const char *isa, block_mix_fn fn)
+{
+    enum { MAXV = 33, MAXR = 9, DS = 8 * MAXV + 12, BS = 8 * MAXV + 4 };
+    static float ref[(MAXR + 1) * DS + 8], out[(MAXR + 1) * DS + 8], blk[(MAXR + 1) * BS + 8];
+    int cases = 0;
+    for (int rows = 0; rows <= MAXR; rows++)
+        for (int nvec = 0; nvec <= MAXV; nvec += (nvec < 4 ? 1 : 5))
+            for (int off = 0; off < 3; off++)
+                for (int mi = 0; mi < 2; mi++) {
+                    float m[12];
+                    for (int i = 0; i < 12; i++) m[i] = mi == 1 && i % 3 ? 0.0f : frand();
+                    for (size_t i = 0; i < sizeof ref / sizeof *ref; i++) ref[i] = out[i] = frand();
+                    for (size_t i = 0; i < sizeof blk / sizeof *blk; i++) blk[i] = frand();
+                    /* sheet pixels start on 4-float boundaries plus 4 off, as
+                     * block pixels do (offsets shift both) */
+                    vs_splat_block_mix_scalar(ref + 4 * off, DS, blk + 4 * off, BS, rows, nvec, m);
+                    fn(out + 4 * off, DS, blk + 4 * off, BS, rows, nvec, m);
+                    if (memcmp(ref, out, sizeof ref) != 0) {
+                        if (isa)
+                            CHECK(0, "splat_block_mix %s differs from scalar: rows=%d nvec=%d offset=%d matrix %d",
+                                  isa, rows, nvec, off, mi);
+                        return 1;
+                    }
+                    cases++;
+                }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "splat_block_mix", isa, cases);
+    return 0;
+}
+
+/* A deliberately wrong mixing kernel (channel 3 takes h dy's weight for
+ * h dx) must fail check_block_mix. */
+static void block_mix_off(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                          const float *m)
+{
+    float w[12];
+    memcpy(w, m, sizeof w);
+    w[10] = m[11];
+    vs_splat_block_mix_scalar(dst, ds, blk, bs, rows, nvec, w);
+}
+
 /* Shading tables filled with random entries (every index mistake shows),
  * padded by 4 bytes as vs_shade_lut_setup does for 32-bit gathers. */
 enum { NL = 64, NP = NL / 2 + 1 };
@@ -330,7 +374,8 @@ static void check_dispatch(void)
         vs_isa want = (vs_isa)cap > best ? best : (vs_isa)cap;
         CHECK(k.isa == want, "cap %s gave %s, expected %s", vs_isa_name((vs_isa)cap), vs_isa_name(k.isa),
               vs_isa_name(want));
-        CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.classify_cd &&
+        CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.splat_block_mix &&
+                  k.classify_cd &&
                   k.classify_gs && k.shade_lut, "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
@@ -352,10 +397,12 @@ int main(void)
           "check_classify_gs cannot tell a wrong kernel from the reference");
     CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
     CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
+    CHECK(check_block_mix(NULL, block_mix_off), "check_block_mix cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
         check_block("sse4", vs_splat_block_sse4);
+        check_block_mix("sse4", vs_splat_block_mix_sse4);
     } else {
         printf("SKIP: sse4 kernels: this CPU has no SSE4.1\n");
     }
@@ -363,6 +410,7 @@ int main(void)
         check_row4("avx2", vs_splat_row4_avx2, 0, NULL);
         check_row4("avx2", NULL, 1, vs_splat_row_gs_avx2);
         check_block("avx2", vs_splat_block_avx2);
+        check_block_mix("avx2", vs_splat_block_mix_avx2);
         check_classify("avx2", vs_classify_cd_avx2, &fx);
         check_classify_gs("avx2", vs_classify_gs_avx2, &fx);
         check_shade("avx2", vs_shade_lut_avx2, &fx);

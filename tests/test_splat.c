@@ -527,7 +527,7 @@ static void test_skewed_blocks(void)
                 seed = seed * 1664525u + 1013904223u;
                 const float cy = 50.0f + (float)(seed >> 8) / 16777216.0f;
                 int x, y, nvec;
-                vs_block_build_skewed(&g, f.row_shift, cx, cy, 1, maxvec, blk, &x, &y, &nvec);
+                vs_block_build_skewed(&g, f.row_shift, cx, cy, 1, 0, maxvec, blk, &x, &y, &nvec);
                 double sum = 0.0, truth_sum = 0.0;
                 for (int j = 0; j < g.ny; j++)
                     for (int i = 0; i < 8 * nvec; i++) {
