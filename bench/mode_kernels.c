@@ -15,7 +15,8 @@
 typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
-    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs */
+    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
+                 8 gradient-splat block (mixing) */
     void *fn;
 } kernel_entry;
 
@@ -94,6 +95,11 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
             case 4:
                 ((vs_splat_block_fn)k->fn)(buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), w8);
                 break;
+            case 8: {
+                const float m[12] = {0.5f, 0, 0, 0, -0.3f, 0.1f, 0, 0.2f, -0.4f, 0.25f, 0.1f, 0.05f};
+                ((void (*)(float *, ptrdiff_t, const float *, ptrdiff_t, int, int, const float *))k->fn)(
+                    buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), m);
+            } break;
             case 5:
                 ((vs_classify_cd_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + SHEET_S + 1 + off,
                                            B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, SHEET_S, n, &B->T);
@@ -117,7 +123,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    double elems = k->kind == 4 ? 8.0 * block_nvec(n) * BLOCK_ROWS : n;
+    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : n;
     return best * 1e6 / ((double)reps * elems);
 }
 
@@ -161,6 +167,9 @@ int bench_kernels(const bench_opts *o)
         {"splat_block", VS_ISA_SSE4, 4, (void *)vs_splat_block_sse4},
         {"splat_block", VS_ISA_AVX2, 4, (void *)vs_splat_block_avx2},
         {"splat_block", VS_ISA_AVX512, 4, (void *)vs_splat_block_avx512},
+        {"splat_block_mix", VS_ISA_SCALAR, 8, (void *)vs_splat_block_mix_scalar},
+        {"splat_block_mix", VS_ISA_SSE4, 8, (void *)vs_splat_block_mix_sse4},
+        {"splat_block_mix", VS_ISA_AVX2, 8, (void *)vs_splat_block_mix_avx2},
         {"classify_cd", VS_ISA_SCALAR, 5, (void *)vs_classify_cd_scalar},
         {"classify_cd", VS_ISA_AVX2, 5, (void *)vs_classify_cd_avx2},
         {"classify_gs", VS_ISA_SCALAR, 7, (void *)vs_classify_gs_scalar},
@@ -192,16 +201,16 @@ int bench_kernels(const bench_opts *o)
     long reps = o->quick ? 200000 : 2000000;
     FILE *csv = bench_results_dir(o) == 0 ? bench_result_open(o, "kernels.csv") : NULL;
     if (csv) fprintf(csv, "kernel,isa,n,ns_per_element,speedup_vs_scalar\n");
-    printf("kernel         isa      n=9 ns/elem  x scalar   n=64 ns/elem  x scalar"
-           "   (splat_block: 8 rows of 8 / 64 floats)\n");
+    printf("kernel           isa      n=9 ns/elem  x scalar   n=64 ns/elem  x scalar"
+           "   (splat_block, splat_block_mix: 8 rows of 8 / 64 floats)\n");
     double scalar_ns[2] = {0, 0};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         const kernel_entry *k = &all[i];
         if (k->isa > best) {
-            printf("%-14s %-8s skipped: this CPU has no %s\n", k->kernel, vs_isa_name(k->isa), vs_isa_name(k->isa));
+            printf("%-16s %-8s skipped: this CPU has no %s\n", k->kernel, vs_isa_name(k->isa), vs_isa_name(k->isa));
             continue;
         }
-        printf("%-14s %-8s", k->kernel, vs_isa_name(k->isa));
+        printf("%-16s %-8s", k->kernel, vs_isa_name(k->isa));
         for (int l = 0; l < 2; l++) {
             double ns = time_kernel(k, lengths[l], buf, ex, exd, alpha, rgb, B, reps);
             if (k->isa == VS_ISA_SCALAR) scalar_ns[l] = ns;
