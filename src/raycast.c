@@ -774,6 +774,9 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         free(J);
         return vs_set_error(ctx, VS_ERR_CANCELLED, "raycast: cancelled by the progress callback");
     }
+    /* completion is reported even when other threads cast every row (a
+     * small image), as the splatting pipelines do */
+    if (s->progress) s->progress(s->progress_user, 1.0);
     out->width = J->cam.width;
     out->height = J->cam.height;
     out->rgba = J->rgba;
