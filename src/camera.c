@@ -90,16 +90,6 @@ void vs_camera_index_to_view0(const vs_camera *cam, const double idx[3], double 
         v[r] = cam->M[r][0] * idx[0] + cam->M[r][1] * idx[1] + cam->M[r][2] * idx[2] + cam->t[r];
 }
 
-void vs_camera_index_to_view(const vs_camera *cam, const double idx[3], double v[3])
-{
-    vs_camera_index_to_view0(cam, idx, v);
-    if (cam->persp) {
-        double sc = vs_camera_scale(cam, v[2]);
-        v[0] = cam->cx + (v[0] - cam->cx) * sc;
-        v[1] = cam->cy + (v[1] - cam->cy) * sc;
-    }
-}
-
 void vs_camera_view_to_index(const vs_camera *cam, const double v[3], double idx[3])
 {
     double x = v[0], y = v[1];

@@ -42,6 +42,20 @@ typedef struct vs_footprint {
 
 vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_camera *cam,
                              vs_footprint *fp);
+
+/* The in-sheet footprint seen s times larger (a perspective sheet): the
+ * quadratic form in pixels shrinks by s^2; the tables are shared, read
+ * only, and depth terms are unchanged. */
+static inline vs_footprint vs_footprint_scaled(const vs_footprint *fp, float s)
+{
+    vs_footprint f = *fp;
+    const float s2 = s * s;
+    f.A /= s2;
+    f.B /= s2;
+    f.C /= s2;
+    f.row_k /= s2;
+    return f;
+}
 void vs_footprint_free(vs_footprint *fp);
 
 static inline float vs_fp_exp(const vs_footprint *fp, float t)

@@ -97,18 +97,25 @@ typedef struct vs_camera {
 
 vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
                           const vs_settings *s, vs_camera *cam);
-/* index -> view: x, y in image pixels (after the perspective divide), z the
- * depth in view units.  With perspective, only points with z >= near_z
- * project meaningfully. */
-void vs_camera_index_to_view(const vs_camera *cam, const double idx[3], double v[3]);
-void vs_camera_view_to_index(const vs_camera *cam, const double v[3], double idx[3]);
 /* index -> view before the perspective divide: x, y are where the point
- * would appear at depth 0 (its image position when orthographic). */
+ * would appear at depth 0 (its image position when orthographic), z the
+ * depth in view units. */
 void vs_camera_index_to_view0(const vs_camera *cam, const double idx[3], double v[3]);
+/* view (x, y in image pixels after the perspective divide, depth z) ->
+ * index; with perspective only for z > near_z. */
+void vs_camera_view_to_index(const vs_camera *cam, const double v[3], double idx[3]);
 /* Image scale at depth z relative to z = 0 (1 for orthographic). */
 static inline double vs_camera_scale(const vs_camera *cam, double z)
 {
     return cam->persp ? cam->persp_dz / (cam->persp_dz + z) : 1.0;
+}
+/* Scale of sheet k (slabs of thickness `slab`): at its slab's middle depth,
+ * held at the near plane's for sheets before it.  Every sheet-level use of
+ * the scale (section placement, tables, gradients) takes it from here. */
+static inline double vs_camera_sheet_scale(const vs_camera *cam, int k, double slab)
+{
+    const double z = (k + 0.5) * slab;
+    return vs_camera_scale(cam, z > cam->near_z ? z : cam->near_z);
 }
 /* The image box (x0, x1, y0, y1) covered by points whose depth-0 position
  * lies in [xo0, xo1] x [yo0, yo1] at depths in [z0, z1] (z0 >= near_z). */

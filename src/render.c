@@ -141,27 +141,59 @@ static vs_status check_settings(vs_context *ctx, const vs_settings *s)
 }
 
 /* Perspective: skewed tables for sheet sheet_k0 + i, the footprint scaled
- * by the sheet's depth (src/tile.c's sheet_scale).  A sheet whose
- * footprint is too large for tables, or whose tables cannot be allocated,
- * keeps ny = 0 and is splatted with an exponential per pixel. */
+ * by the sheet's depth.  A sheet whose footprint is too large for tables,
+ * or whose tables cannot be allocated, keeps ny = 0 and is splatted with an
+ * exponential per pixel. */
 static void sheet_skew_task(void *arg, int worker, int i)
 {
     (void)worker;
     vs_frame *F = arg;
-    const double z = (F->sheet_k0 + i + 0.5) * F->fp.slab;
-    const float s = (float)vs_camera_scale(&F->cam, z > F->cam.near_z ? z : F->cam.near_z);
-    vs_footprint f = F->fp; /* shares the exponential table, read only */
-    const float s2 = s * s;
-    f.A /= s2;
-    f.B /= s2;
-    f.C /= s2;
-    f.row_k /= s2;
-    const double det = (double)f.A * f.C - (double)f.B * f.B;
+    const float s = (float)vs_camera_sheet_scale(&F->cam, F->sheet_k0 + i, F->fp.slab);
+    const vs_footprint f = vs_footprint_scaled(&F->fp, s);
     vs_block_geom *g = &F->sheet_skew[i];
-    if (!(2.0 * sqrt(f.emax / f.A) + 2 <= VS_BLOCK_MAX_SPAN && 2.0 * sqrt(f.emax * f.A / det) + 2 <= VS_BLOCK_MAX_SPAN) ||
-        !vs_block_setup_skewed(g, &f)) {
+    if (!vs_block_setup_skewed(g, &f)) {
         vs_block_free(g);
         memset(g, 0, sizeof *g);
+    }
+}
+
+/* Perspective: a sheet's footprints all share its depth's scale, so each
+ * sheet the bricks reach gets skewed tables of its own (after the bricks'
+ * view boxes are known), built on the pool.  All of them together stay
+ * within 4 M floats (16 MB, and as many entries to compute a frame); a
+ * close-up beyond that keeps the exponential per pixel.  Without tables
+ * nothing changes: use_skewed stays as it was. */
+static void setup_sheet_tables(vs_frame *F, struct vs_pool *pool, int ch)
+{
+    const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
+    int k0 = INT_MAX, k1 = INT_MIN;
+    for (size_t b = 0; b < F->rel->nbricks; b++) {
+        if (isnan(F->bview[b].x0)) continue; /* behind the near plane */
+        int a = (int)floorf((F->bview[b].z0 - rz) / slab), c = (int)floorf((F->bview[b].z1 + rz) / slab);
+        if (a < k0) k0 = a;
+        if (c > k1) k1 = c;
+    }
+    if (k0 > k1 || (long)k1 - k0 >= 65536) return;
+    const double det = (double)F->fp.A * F->fp.C - (double)F->fp.B * F->fp.B;
+    const double rx = sqrt(F->fp.emax / F->fp.A), ry = sqrt(F->fp.emax * F->fp.A / det); /* at scale 1 */
+    double floats = 0.0;
+    for (int k = k0; k <= k1; k++) {
+        const double sc = vs_camera_sheet_scale(&F->cam, k, F->fp.slab);
+        floats += (VS_BLOCK_PHASES + 1) * (2.0 * (rx + ry) * sc + 10); /* columns (8-padded) + rows */
+    }
+    if (floats > 4.0 * (1 << 20)) return;
+    F->sheet_skew = calloc((size_t)(k1 - k0 + 1), sizeof *F->sheet_skew);
+    if (!F->sheet_skew) return;
+    F->sheet_k0 = k0;
+    F->nsheet_skew = k1 - k0 + 1;
+    vs_pool_run(pool, F->nsheet_skew, sheet_skew_task, F);
+    for (int i = 0; i < F->nsheet_skew; i++) {
+        const vs_block_geom *g = &F->sheet_skew[i];
+        if (g->ny <= 0) continue;
+        const int gv = vs_block_skewed_nvec(g, F->fp.row_shift, ch);
+        if (gv > F->skew_maxvec) F->skew_maxvec = gv;
+        if (g->ny > F->skew_maxrows) F->skew_maxrows = g->ny;
+        F->use_skewed = 1;
     }
 }
 
@@ -282,48 +314,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
      * brick order inside each tile for any thread count), fill */
     J.fill = 0;
     vs_pool_run(ctx->pool, J.nchunks, bin_task, &J);
-    if (F.cam.persp && !F.use_blocks) {
-        /* perspective: a sheet's footprints all share its depth's scale, so
-         * each sheet the bricks reach gets skewed tables of its own */
-        const float slab = (float)F.fp.slab, rz = (float)F.fp.rz;
-        int k0 = INT_MAX, k1 = INT_MIN;
-        for (size_t b = 0; b < nb; b++) {
-            if (isnan(F.bview[b].x0)) continue; /* behind the near plane */
-            int a = (int)floorf((F.bview[b].z0 - rz) / slab), c = (int)floorf((F.bview[b].z1 + rz) / slab);
-            if (a < k0) k0 = a;
-            if (c > k1) k1 = c;
-        }
-        /* the tables of all sheets stay within 4 M floats (16 MB, and as
-         * many table entries to compute a frame); a close-up beyond that
-         * keeps the exponential per pixel */
-        double floats = 0.0;
-        if (k0 <= k1 && (long)k1 - k0 < 65536) {
-            const double det = (double)F.fp.A * F.fp.C - (double)F.fp.B * F.fp.B;
-            for (int k = k0; k <= k1; k++) {
-                const double z = (k + 0.5) * F.fp.slab;
-                const double sc = vs_camera_scale(&F.cam, z > F.cam.near_z ? z : F.cam.near_z);
-                const double nx = 2.0 * sqrt(F.fp.emax / F.fp.A) * sc + 9, ny = 2.0 * sqrt(F.fp.emax * F.fp.A / det) * sc + 1;
-                floats += (VS_BLOCK_PHASES + 1) * (nx + ny);
-            }
-        }
-        if (k0 <= k1 && (long)k1 - k0 < 65536 && floats <= 4.0 * (1 << 20)) {
-            F.sheet_skew = calloc((size_t)(k1 - k0 + 1), sizeof *F.sheet_skew);
-            if (F.sheet_skew) {
-                F.sheet_k0 = k0;
-                F.nsheet_skew = k1 - k0 + 1;
-                vs_pool_run(ctx->pool, F.nsheet_skew, sheet_skew_task, &F);
-                const int ch = s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4;
-                for (int i = 0; i < F.nsheet_skew; i++) {
-                    const vs_block_geom *g = &F.sheet_skew[i];
-                    if (g->ny <= 0) continue;
-                    const int gv = vs_block_skewed_nvec(g, F.fp.row_shift, ch);
-                    if (gv > F.skew_maxvec) F.skew_maxvec = gv;
-                    if (g->ny > F.skew_maxrows) F.skew_maxrows = g->ny;
-                    F.use_skewed = 1;
-                }
-            }
-        }
-    }
+    if (F.cam.persp && !F.use_blocks) setup_sheet_tables(&F, ctx->pool, s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4);
     uint64_t total = 0;
     for (int t = 0; t < F.ntiles; t++) {
         F.tile_start[t] = (uint32_t)total;

@@ -56,14 +56,6 @@ typedef struct tile_ctx {
     float ry0;           /* footprint half-height without shift              */
 } tile_ctx;
 
-/* Footprint scale of sheet k: its slab's middle depth (perspective; else 1). */
-static inline float sheet_scale(const vs_frame *F, int k)
-{
-    if (!F->cam.persp) return 1.0f;
-    double z = (k + 0.5) * F->fp.slab;
-    return (float)vs_camera_scale(&F->cam, z > F->cam.near_z ? z : F->cam.near_z);
-}
-
 /* Compute the slab section of voxel at depth z for sheet k; 0 if empty.
  * (x, y) is the voxel's image position, with perspective its depth-0 one:
  * the section on sheet k's plane is centred on the same world point, which
@@ -87,11 +79,13 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     sec->cx = x;
     sec->cy = y;
     sec->sc = sec->is = 1.0f;
-    sec->g = t->F->use_skewed ? &t->F->skew : NULL;
-    if (t->F->cam.persp) {
+    if (!t->F->cam.persp) {
+        sec->g = t->F->use_skewed ? &t->F->skew : NULL;
+    } else {
         const int i = k - t->F->sheet_k0;
         sec->g = i >= 0 && i < t->F->nsheet_skew && t->F->sheet_skew[i].ny > 0 ? &t->F->sheet_skew[i] : NULL;
-        const float sk = sheet_scale(t->F, k), cx = (float)t->F->cam.cx, cy = (float)t->F->cam.cy;
+        const float sk = (float)vs_camera_sheet_scale(&t->F->cam, k, fp->slab);
+        const float cx = (float)t->F->cam.cx, cy = (float)t->F->cam.cy;
         sec->cx = cx + (x - cx) * sk;
         sec->cy = cy + (y - cy) * sk;
         sec->sc = sk;
@@ -708,7 +702,7 @@ static void clip_outside(const tile_ctx *t, int k, const rect *r, float *alpha)
 static void perspective_gradients(const tile_ctx *t, int k, const rect *r, const float *alpha, float *g)
 {
     const vs_camera *cam = &t->F->cam;
-    const float sk = (float)vs_camera_scale(cam, (k + 0.5) * t->F->fp.slab);
+    const float sk = (float)vs_camera_sheet_scale(cam, k, t->F->fp.slab);
     const float cz = (float)(cam->px_per_mm / (cam->focal_px * cam->z_per_mm));
     for (int y = r->y0; y < r->y1; y++) {
         const float v = (float)((y + t->oy) - cam->cy);

@@ -506,12 +506,7 @@ static void test_skewed_blocks(void)
                 CHECK(0, "footprint: %s", vs_last_error(ctx));
                 continue;
             }
-            vs_footprint f = fp;
-            const float s2 = scales[si] * scales[si];
-            f.A /= s2;
-            f.B /= s2;
-            f.C /= s2;
-            f.row_k /= s2;
+            const vs_footprint f = vs_footprint_scaled(&fp, scales[si]);
             vs_block_geom g;
             if (!vs_block_setup_skewed(&g, &f)) {
                 CHECK(0, "vs_block_setup_skewed");
