@@ -45,6 +45,17 @@ static inline double vs_volume_at(const struct vs_volume *v, size_t i)
     default: return ((const float *)v->data)[i];
     }
 }
+/* What a splat is weighted by: the value at linear index i, non-finite
+ * values read as 0 (empty space). */
+static inline float vs_volume_density(const struct vs_volume *v, size_t i)
+{
+    double x = vs_volume_at(v, i);
+    return isfinite(x) ? (float)x : 0.0f;
+}
+/* Central-difference gradient on the grid at voxel (i, j, k), linear index
+ * idx, in index units (one-sided at the borders; non-finite results 0):
+ * what the pre-shaded pipelines shade a voxel by. */
+void vs_volume_grid_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3]);
 /* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out);

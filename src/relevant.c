@@ -11,7 +11,6 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
 {
     if (!rc) return;
     free(rc->voxels);
-    free(rc->grad);
     free(rc->bricks);
     free(rc->scratch);
     free(rc);
@@ -128,8 +127,6 @@ typedef struct build_job {
     uint32_t *pos;         /* per brick: count, then next slot               */
     size_t *slab_count;    /* voxels per slab of bricks                      */
     vs_voxel *vox;
-    float *grad;
-    int with_grad;
     int combine;           /* pass 2 of the seam rule, else in-range only    */
 } build_job;
 
@@ -196,45 +193,20 @@ static void fill_slab(void *arg, int worker, int bk)
 {
     (void)worker;
     const build_job *J = arg;
-    const struct vs_volume *vol = J->vol;
     const int *d = J->d, *nb = J->nb;
     const int k1 = (bk + 1) * VS_BRICK < d[2] ? (bk + 1) * VS_BRICK : d[2];
     for (int k = bk * VS_BRICK; k < k1; k++)
         for (int j = 0; j < d[1]; j++) {
             size_t idx = ((size_t)k * d[1] + j) * d[0];
             uint32_t *pb = J->pos + ((size_t)bk * nb[1] + j / VS_BRICK) * nb[0];
-            for (int i = 0; i < d[0]; i++, idx++) {
-                if (!J->mask[idx]) continue;
-                size_t o = pb[i / VS_BRICK]++;
-                double v = vs_volume_at(vol, idx);
-                vs_voxel *vx = &J->vox[o];
-                vx->i = (uint16_t)i;
-                vx->j = (uint16_t)j;
-                vx->k = (uint16_t)k;
-                vx->pad = 0;
-                vx->value = isfinite(v) ? (float)v : 0.0f;
-                if (J->with_grad) {
-                    /* central differences on the grid (one-sided at borders) */
-                    const int p[3] = {i, j, k};
-                    const size_t st[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
-                    for (int a = 0; a < 3; a++) {
-                        int lo = p[a] > 0 ? 1 : 0, hi = p[a] < d[a] - 1 ? 1 : 0;
-                        double g = 0.0;
-                        if (lo + hi > 0) {
-                            double fh = vs_volume_at(vol, idx + hi * st[a]);
-                            double fl = vs_volume_at(vol, idx - lo * st[a]);
-                            g = (fh - fl) / (lo + hi);
-                            if (!isfinite(g)) g = 0.0;
-                        }
-                        J->grad[3 * o + a] = (float)g;
-                    }
-                }
-            }
+            const int jk = (j & (VS_BRICK - 1)) << VS_BRICK_BITS | (k & (VS_BRICK - 1)) << (2 * VS_BRICK_BITS);
+            for (int i = 0; i < d[0]; i++, idx++)
+                if (J->mask[idx]) J->vox[pb[i / VS_BRICK]++] = (vs_voxel)(jk | (i & (VS_BRICK - 1)));
         }
 }
 
 static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                       int seam, int with_grad, vs_relevant_cache *rc, vs_relevant_cache *old)
+                       int seam, vs_relevant_cache *rc, vs_relevant_cache *old)
 {
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
@@ -242,7 +214,7 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
     uint8_t *mask = take(old ? (void **)&old->scratch : &none, 2 * n); /* mask + dilation scratch */
     if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     uint8_t *line = mask + n;
-    build_job J = {vol, d, NULL, c, mask, {0, 0, 0}, NULL, NULL, NULL, NULL, with_grad, 0};
+    build_job J = {vol, d, NULL, c, mask, {0, 0, 0}, NULL, NULL, NULL, 0};
     /* integer volumes: classify each possible value once */
     uint8_t *lut = NULL;
     if (vol->type != VS_F32) {
@@ -301,15 +273,11 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
     }
     for (size_t b = 0; b < nbt; b++) nonempty += pos[b] != 0;
     vs_voxel *vox = old ? take((void **)&old->voxels, count * sizeof *vox) : malloc((count ? count : 1) * sizeof *vox);
-    float *grad = !with_grad ? NULL
-                  : old    ? take((void **)&old->grad, count * 3 * sizeof(float))
-                           : malloc((count ? count : 1) * 3 * sizeof(float));
     vs_brick *bricks = malloc((nonempty ? nonempty : 1) * sizeof *bricks);
-    if (!vox || (with_grad && !grad) || !bricks) {
+    if (!vox || !bricks) {
         free(mask);
         free(pos);
         free(vox);
-        free(grad);
         free(bricks);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
     }
@@ -336,7 +304,6 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
                 run += nvox;
             }
     J.vox = vox;
-    J.grad = grad;
     vs_pool_run(pool, nb[2], fill_slab, &J);
     free(pos);
     rc->nbricks = nbk;
@@ -344,18 +311,17 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
     rc->scratch = mask; /* kept for the next rebuild */
     rc->count = count;
     rc->voxels = vox;
-    rc->grad = grad;
     return VS_OK;
 }
 
 vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                          int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt)
+                          int seam, const vs_relevant_cache **out, int *rebuilt)
 {
     vs_relevant_cache *rc = ctx->relevant;
     *rebuilt = 0;
     if (rc && rc->vol == vol && rc->serial == vol->serial && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
         rc->vmax == vol->vmax && rc->alpha_lo == c->alpha_lo && rc->alpha_hi == c->alpha_hi &&
-        rc->seam == seam && rc->with_grad >= with_grad) {
+        rc->seam == seam) {
         *out = rc;
         return VS_OK;
     }
@@ -367,7 +333,7 @@ vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     }
     double t0 = vs_now_ms();
-    vs_status st = build(ctx, pool, vol, c, seam, with_grad, rc, old);
+    vs_status st = build(ctx, pool, vol, c, seam, rc, old);
     vs_relevant_cache_free(old); /* what build did not take over */
     if (st != VS_OK) {
         vs_relevant_cache_free(rc);
@@ -381,7 +347,6 @@ vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs
     rc->alpha_lo = c->alpha_lo;
     rc->alpha_hi = c->alpha_hi;
     rc->seam = seam;
-    rc->with_grad = with_grad;
     rc->build_ms = vs_now_ms() - t0;
     ctx->relevant = rc;
     *out = rc;

@@ -7,14 +7,18 @@
 
 #include "internal.h"
 
-typedef struct vs_voxel {
-    uint16_t i, j, k, pad; /* grid position                         */
-    float value;           /* raw density                           */
-} vs_voxel;
-
 /* Voxels are stored brick by brick (VS_BRICK^3 grid cells) so a frame can
- * project, bin and cull whole bricks before touching their voxels. */
-#define VS_BRICK 8
+ * project, bin and cull whole bricks before touching their voxels.  A voxel
+ * is only its position in the brick, di | dj << 3 | dk << 6 (2 bytes, not
+ * the 12 of position plus value): a frame reads the value, and the
+ * pre-shaded pipelines the grid gradient, from the volume, and only for the
+ * voxels that survive culling. */
+#define VS_BRICK_BITS 3
+#define VS_BRICK (1 << VS_BRICK_BITS)
+typedef uint16_t vs_voxel;
+#define VS_VOXEL_DI(v) ((v) & (VS_BRICK - 1))
+#define VS_VOXEL_DJ(v) (((v) >> VS_BRICK_BITS) & (VS_BRICK - 1))
+#define VS_VOXEL_DK(v) ((v) >> (2 * VS_BRICK_BITS))
 typedef struct vs_brick {
     uint32_t start, count;  /* range in the voxel list                     */
     uint16_t i0, j0, k0;    /* lowest grid position of the brick's voxels   */
@@ -30,12 +34,10 @@ typedef struct vs_relevant_cache {
     double vmin, vmax;
     double alpha_lo, alpha_hi;
     int seam;
-    int with_grad;
     /* the list, brick by brick (bricks in k, j, i order), and inside a
      * brick ordered by k, then j, then i */
     size_t count;
     vs_voxel *voxels;
-    float *grad;           /* 3 per voxel, index units (with_grad only) */
     size_t nbricks;
     vs_brick *bricks;      /* non-empty bricks only                     */
     uint8_t *scratch;      /* 2 bytes per grid voxel, kept for rebuilds */
@@ -43,13 +45,12 @@ typedef struct vs_relevant_cache {
 } vs_relevant_cache;
 
 /* Returns the cached list if still valid, else rebuilds it.  *rebuilt tells
- * which happened.  with_grad: also store grid central-difference gradients
- * (pre-shaded pipelines shade voxels). */
+ * which happened. */
 struct vs_pool;
 /* The rebuild runs on `pool` (NULL: on the calling thread); the list is the
  * same for any thread count. */
 vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                          int seam, int with_grad, const vs_relevant_cache **out, int *rebuilt);
+                          int seam, const vs_relevant_cache **out, int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
 /* Does the classification give value 0 (empty space) a non-zero opacity?
  * Then every voxel is relevant and sheets are clipped to the volume. */

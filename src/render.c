@@ -278,13 +278,13 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
      * the post-classified pipelines need the seam layer too (paper §4.3) */
     int seam = s->seam >= 0 ? s->seam : (int)ceil(s->kernel_radius);
     if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
-    int with_grad = s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA;
     F.clip_to_volume = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
     int rebuilt = 0;
     if ((rc = ensure_pool(ctx, s)) != VS_OK) goto fail;
     double t_rel = vs_now_ms();
-    if ((rc = vs_relevant_get(ctx, ctx->pool, vol, F.cls, seam, with_grad, &F.rel, &rebuilt)) != VS_OK) goto fail;
+    if ((rc = vs_relevant_get(ctx, ctx->pool, vol, F.cls, seam, &F.rel, &rebuilt)) != VS_OK) goto fail;
     double ms_relevant = rebuilt ? vs_now_ms() - t_rel : 0.0;
+    F.vol = vol;
     int nthreads = vs_pool_threads(ctx->pool);
 
     double t_setup = vs_now_ms();

@@ -39,6 +39,7 @@ typedef struct vs_frame {
     vs_shade_lut lut;
     vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;
+    const struct vs_volume *vol;     /* what the voxels' values are read from   */
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
     int clip_to_volume;              /* empty space is visible: pixels whose sheet

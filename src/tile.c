@@ -307,7 +307,7 @@ static void clear_rect(float *buf, int stride, int ch, const rect *r)
 /* A voxel of an expanded brick, from its first sheet to its last. */
 typedef struct pend {
     float x, y, z; /* view-space centre (perspective: x, y at depth 0) */
-    uint32_t v;    /* index in the relevant-voxel list              */
+    uint32_t v;    /* linear index in the volume                    */
     int kl;        /* last sheet (lowered when the voxel is culled) */
     int next;      /* next entry with the same first sheet          */
     float w[4];    /* splat weights before the slab's depth integral */
@@ -334,12 +334,13 @@ typedef struct tile_state {
 static inline float lookup_corr(const vs_frame *F, const float *table, float v);
 static inline void lookup_color(const vs_frame *F, float v, float rgb[3]);
 
-/* Splat weights of voxel v: density (post), or classified colour times the
- * Phong terms of its grid gradient (pre-shading: once per voxel and view). */
+/* Splat weights of the voxel at linear index v: density (post), or
+ * classified colour times the Phong terms of its grid gradient (pre-shading:
+ * once per voxel and view). */
 static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
 {
     const float bscale = (float)(F->fp.b / F->fp.slab);
-    float val = F->rel->voxels[v].value;
+    float val = vs_volume_density(F->vol, v);
     if (F->pipeline == VS_PIPELINE_POST_CD || F->pipeline == VS_PIPELINE_POST_GS) {
         w[0] = val * bscale;
         w[1] = w[2] = w[3] = 0.0f;
@@ -347,7 +348,10 @@ static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
     }
     float rgb[3], a = vs_classify_alpha(F->cls, val);
     lookup_color(F, val, rgb);
-    const float *g = F->rel->grad + 3 * (size_t)v;
+    const int *dims = F->vol->dims;
+    float g[3];
+    vs_volume_grid_gradient(F->vol, (int)(v % (uint32_t)dims[0]), (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
+                            (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1])), v, g);
     const vs_camera *cam = &F->cam;
     double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
     double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
@@ -429,9 +433,13 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
         }
     }
     const float near_z = (float)F->cam.near_z;
-    for (uint32_t v = br->start; v < br->start + br->count; v++) {
-        const vs_voxel *vx = &F->rel->voxels[v];
-        const float di = (float)(vx->i - br->i0), dj = (float)(vx->j - br->j0), dk = (float)(vx->k - br->k0);
+    const uint32_t row = (uint32_t)F->vol->dims[0], plane = row * (uint32_t)F->vol->dims[1];
+    const uint32_t first = br->i0 + row * br->j0 + plane * br->k0; /* linear index of the brick's corner */
+    for (uint32_t n = br->start; n < br->start + br->count; n++) {
+        const vs_voxel vx = F->rel->voxels[n];
+        const uint32_t ui = VS_VOXEL_DI(vx), uj = VS_VOXEL_DJ(vx), uk = VS_VOXEL_DK(vx);
+        const uint32_t v = first + ui + row * uj + plane * uk;
+        const float di = (float)ui, dj = (float)uj, dk = (float)uk;
         float x = base[0] + m[0][0] * di + m[0][1] * dj + m[0][2] * dk;
         float y = base[1] + m[1][0] * di + m[1][1] * dj + m[1][2] * dk;
         float z = base[2] + m[2][0] * di + m[2][1] * dj + m[2][2] * dk;
