@@ -3,6 +3,7 @@
 #include "pool.h"
 #include "relevant.h"
 
+#include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +24,7 @@ void vs_context_release(vs_context *ctx)
     if (!ctx) return;
     vs_pool_destroy(ctx->pool);
     vs_relevant_cache_free(ctx->relevant);
+    if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */
     free(ctx);
 }
 

@@ -26,7 +26,9 @@ vs_status vs_image_write(vs_context *ctx, const char *path, const vs_image *img,
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "%s: bits must be 8, 16 or 32, not %d",
                             path, bits);
     char err[480];
-    st = vs_oiio_write_rgba(path, img->width, img->height, img->rgba, bits, err, sizeof err);
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) return VS_ERR_IO;
+    st = io->write_rgba(path, img->width, img->height, img->rgba, bits, err, sizeof err);
     if (st != VS_OK) return vs_set_error(ctx, st, "%s", err);
     return VS_OK;
 }
@@ -39,7 +41,9 @@ vs_status vs_image_read(vs_context *ctx, const char *path, vs_image *out)
     char err[480];
     int w, h;
     float *px;
-    vs_status st = vs_oiio_read_rgba(path, &w, &h, &px, err, sizeof err);
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) return VS_ERR_IO;
+    vs_status st = io->read_rgba(path, &w, &h, &px, err, sizeof err);
     if (st != VS_OK) return vs_set_error(ctx, st, "%s", err);
     out->width = w;
     out->height = h;

@@ -21,11 +21,13 @@ vs_status vs_image_write_frames(vs_context *ctx, const char *path, const vs_imag
             return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "%s: frame %d is %dx%d, frame 0 %dx%d", path, i,
                                 frames[i].width, frames[i].height, w, h);
     }
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) return VS_ERR_IO;
     const float **px = malloc(sizeof *px * (size_t)count);
     if (!px) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     for (int i = 0; i < count; i++) px[i] = frames[i].rgba;
     char err[480];
-    vs_status st = vs_oiio_write_frames(path, w, h, count, px, fps, err, sizeof err);
+    vs_status st = io->write_frames(path, w, h, count, px, fps, err, sizeof err);
     free(px);
     if (st != VS_OK) return vs_set_error(ctx, st, "%s", err);
     return VS_OK;

@@ -69,6 +69,8 @@ struct vs_context {
     int pool_threads;
     int pool_pin;
     struct vs_relevant_cache *relevant; /* relevant-voxel list, reused          */
+    const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */
+    void *oiio_handle;                  /* its dlopen handle                     */
 };
 
 /* Set the last-error message (printf-style); returns status for chaining. */

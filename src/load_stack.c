@@ -63,6 +63,7 @@ static int imagej_value(const char *desc, const char *key, double *out)
 
 typedef struct stack {
     vs_context *ctx;
+    const vs_oiio_api *io;
     const char *path;   /* the stack, for messages */
     int nz;
     uint64_t encoded;   /* bytes of encoded input, for the size bound */
@@ -153,7 +154,7 @@ static vs_status stack_add(stack *s, vs_oiio_reader *r, int page, int z, const c
     char err[400];
     vs_oiio_info *info = malloc(sizeof *info);
     if (!info) return vs_set_error(s->ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", s->path);
-    vs_status st = vs_oiio_page_info(r, page, info, err, sizeof err);
+    vs_status st = s->io->page_info(r, page, info, err, sizeof err);
     if (st != VS_OK) {
         free(info);
         return vs_set_error(s->ctx, st, "%s: %s", s->path, err);
@@ -179,7 +180,7 @@ static vs_status stack_add(stack *s, vs_oiio_reader *r, int page, int z, const c
     size_t slice_bytes = (size_t)s->width * s->height * s->elem;
     unsigned char *dst = (unsigned char *)s->v->data + (size_t)z * slice_bytes;
     if (ch == 1) {
-        st = vs_oiio_read_page(r, page, s->pix, dst, slice_bytes, err, sizeof err);
+        st = s->io->read_page(r, page, s->pix, dst, slice_bytes, err, sizeof err);
     } else {
         size_t need = slice_bytes * (size_t)ch;
         if (need > s->scratch_bytes) {
@@ -188,7 +189,7 @@ static vs_status stack_add(stack *s, vs_oiio_reader *r, int page, int z, const c
             s->scratch = p;
             s->scratch_bytes = need;
         }
-        st = vs_oiio_read_page(r, page, s->pix, s->scratch, need, err, sizeof err);
+        st = s->io->read_page(r, page, s->pix, s->scratch, need, err, sizeof err);
         if (st == VS_OK) to_gray(s, s->scratch, ch, dst);
     }
     if (st != VS_OK) return vs_set_error(s->ctx, st, "%s: %s", s->path, err);
@@ -214,25 +215,27 @@ vs_status vs_load_image_pages(vs_context *ctx, const char *path, vs_volume **out
     vs_status st = vs_load_file_size(ctx, path, &fsize);
     if (st != VS_OK) return st;
     if (fsize == 0) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: empty file", path);
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) return VS_ERR_IO;
     char err[400];
     vs_oiio_reader *r;
-    st = vs_oiio_open(path, NULL, 0, &r, err, sizeof err);
+    st = io->open(path, NULL, 0, &r, err, sizeof err);
     if (st != VS_OK) return vs_set_error(ctx, st, "%s", err);
     int pages = 0;
-    st = vs_oiio_count_pages(r, VS_MAX_DIM + 1, &pages, err, sizeof err);
+    st = io->count_pages(r, VS_MAX_DIM + 1, &pages, err, sizeof err);
     if (st != VS_OK) {
-        vs_oiio_close(r);
+        io->close(r);
         return vs_set_error(ctx, st, "%s", err);
     }
     if (pages > VS_MAX_DIM) {
-        vs_oiio_close(r);
+        io->close(r);
         return vs_set_error(ctx, VS_ERR_TOO_LARGE, "%s: more than %d pages", path, VS_MAX_DIM);
     }
-    stack s = {.ctx = ctx, .path = path, .nz = pages, .encoded = fsize, .tiff = is_tiff_name(path)};
+    stack s = {.ctx = ctx, .io = io, .path = path, .nz = pages, .encoded = fsize, .tiff = is_tiff_name(path)};
     /* ImageJ hyperstacks interleave channels/frames with slices. */
     vs_oiio_info *info = malloc(sizeof *info);
     if (!info) st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
-    else if ((st = vs_oiio_page_info(r, 0, info, err, sizeof err)) != VS_OK)
+    else if ((st = io->page_info(r, 0, info, err, sizeof err)) != VS_OK)
         vs_set_error(ctx, st, "%s", err);
     else if (strncmp(info->description, "ImageJ=", 7) == 0) {
         double c = 1, f = 1;
@@ -250,7 +253,7 @@ vs_status vs_load_image_pages(vs_context *ctx, const char *path, vs_volume **out
         snprintf(name, sizeof name, "page %d", z);
         st = stack_add(&s, r, z, z, name);
     }
-    vs_oiio_close(r);
+    io->close(r);
     return stack_finish(&s, st, out);
 }
 
@@ -290,6 +293,8 @@ static int natural_qsort(const void *x, const void *y)
 
 vs_status vs_load_folder(vs_context *ctx, const char *path, vs_volume **out)
 {
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) return VS_ERR_IO;
     DIR *dir = opendir(path);
     if (!dir) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open folder: %s", path, strerror(errno));
     char **names = NULL;
@@ -328,7 +333,7 @@ vs_status vs_load_folder(vs_context *ctx, const char *path, vs_volume **out)
     closedir(dir);
     if (st == VS_OK && n == 0)
         st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: no .png, .tif or .tiff slices in the folder", path);
-    stack s = {.ctx = ctx, .path = path, .nz = (int)n, .encoded = total};
+    stack s = {.ctx = ctx, .io = io, .path = path, .nz = (int)n, .encoded = total};
     if (st == VS_OK) {
         qsort(names, n, sizeof *names, natural_qsort);
         s.tiff = is_tiff_name(names[0]);
@@ -337,13 +342,13 @@ vs_status vs_load_folder(vs_context *ctx, const char *path, vs_volume **out)
         char err[400];
         vs_oiio_reader *r;
         snprintf(full, sizeof full, "%s/%s", path, names[z]);
-        st = vs_oiio_open(full, NULL, 0, &r, err, sizeof err);
+        st = io->open(full, NULL, 0, &r, err, sizeof err);
         if (st != VS_OK) {
             vs_set_error(ctx, st, "%s: %s", path, err);
             break;
         }
         st = stack_add(&s, r, 0, (int)z, names[z]);
-        vs_oiio_close(r);
+        io->close(r);
     }
     for (size_t i = 0; i < n; i++) free(names[i]);
     free(names);
@@ -502,6 +507,8 @@ vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out)
     vs_status st = vs_load_file_size(ctx, path, &fsize);
     if (st != VS_OK) return st;
     if (fsize == 0) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: empty file", path);
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) return VS_ERR_IO;
     FILE *f = fopen(path, "rb");
     if (!f) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     tar_member *m = NULL;
@@ -513,7 +520,7 @@ vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out)
     }
     uint64_t total = 0;
     for (size_t i = 0; i < n; i++) total += m[i].size;
-    stack s = {.ctx = ctx, .path = path, .nz = (int)n, .encoded = total, .tiff = is_tiff_name(m[0].name)};
+    stack s = {.ctx = ctx, .io = io, .path = path, .nz = (int)n, .encoded = total, .tiff = is_tiff_name(m[0].name)};
     unsigned char *buf = NULL;
     for (size_t z = 0; st == VS_OK && z < n; z++) {
         if (m[z].size == 0) {
@@ -534,13 +541,13 @@ vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out)
         }
         char err[400];
         vs_oiio_reader *r;
-        st = vs_oiio_open(m[z].name, buf, (size_t)m[z].size, &r, err, sizeof err);
+        st = io->open(m[z].name, buf, (size_t)m[z].size, &r, err, sizeof err);
         if (st != VS_OK) {
             vs_set_error(ctx, st, "%s: %s", path, err);
             break;
         }
         st = stack_add(&s, r, 0, (int)z, m[z].name);
-        vs_oiio_close(r);
+        io->close(r);
     }
     free(buf);
     free(m);

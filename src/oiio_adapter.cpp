@@ -548,4 +548,12 @@ vs_status vs_oiio_write_frames(const char *path, int width, int height, int coun
     }
 }
 
+const vs_oiio_api *vs_oiio_module_api(void)
+{
+    static const vs_oiio_api api = {vs_oiio_open,      vs_oiio_close,      vs_oiio_count_pages,
+                                    vs_oiio_page_info, vs_oiio_read_page,  vs_oiio_read_rgba,
+                                    vs_oiio_write_rgba, vs_oiio_write_pages, vs_oiio_write_frames};
+    return &api;
+}
+
 } // extern "C"

@@ -1,5 +1,11 @@
 /* C interface to the OpenImageIO adapter (src/oiio_adapter.cpp), the only C++
- * in the library.  Every entry catches exceptions and reports a status plus a
+ * in the project.  The adapter is a loadable module (vsplat-oiio.so), not
+ * part of libvsplat: OpenImageIO pulls in some 260 shared libraries (OpenCV,
+ * FFmpeg, GStreamer, ...) that cost 130 MB of resident memory and 0.15 s at
+ * every start, which a program that only renders volumes should not pay.
+ * The library reaches the entry points below through the table vs_oiio(ctx)
+ * loads on a context's first image I/O (src/oiio_module.c); calling them
+ * directly from the library would not link.  Every entry catches exceptions and reports a status plus a
  * message (which names the file) in the caller's buffer, so the C side never
  * sees C++ and the adapter never touches a vs_context. */
 #ifndef VS_OIIO_ADAPTER_H
@@ -75,6 +81,40 @@ vs_status vs_oiio_write_pages(const char *path, int width, int height, int chann
  * frame at a time is converted.  Same temporary-file-and-rename rule. */
 vs_status vs_oiio_write_frames(const char *path, int width, int height, int count,
                                const float *const *frames, double fps, char *err, size_t errcap);
+
+/* The module's entry points as one table: what vs_oiio_module_api(), the
+ * module's only looked-up symbol, returns. */
+typedef struct vs_oiio_api {
+    vs_status (*open)(const char *name, const void *mem, size_t size, vs_oiio_reader **out, char *err,
+                      size_t errcap);
+    void (*close)(vs_oiio_reader *r);
+    vs_status (*count_pages)(vs_oiio_reader *r, int cap, int *count, char *err, size_t errcap);
+    vs_status (*page_info)(vs_oiio_reader *r, int page, vs_oiio_info *info, char *err, size_t errcap);
+    vs_status (*read_page)(vs_oiio_reader *r, int page, vs_pixel_type type, void *dst, size_t dst_bytes, char *err,
+                           size_t errcap);
+    vs_status (*read_rgba)(const char *path, int *width, int *height, float **rgba, char *err, size_t errcap);
+    vs_status (*write_rgba)(const char *path, int width, int height, const float *rgba, int bits, char *err,
+                            size_t errcap);
+    vs_status (*write_pages)(const char *path, int width, int height, int channels, int pages, vs_pixel_type type,
+                             const void *data, double xres, double yres, const char *description, char *err,
+                             size_t errcap);
+    vs_status (*write_frames)(const char *path, int width, int height, int count, const float *const *frames,
+                              double fps, char *err, size_t errcap);
+} vs_oiio_api;
+
+#define VS_OIIO_MODULE_NAME "vsplat-oiio.so"
+#define VS_OIIO_MODULE_ENTRY "vs_oiio_module_api"
+#define VS_OIIO_MODULE_ENV "VSPLAT_OIIO_MODULE"
+const vs_oiio_api *vs_oiio_module_api(void);
+
+/* The table for this context, loading the module on first use; NULL (and
+ * the context's error says why and where it looked) if it cannot be loaded.
+ * Search: $VSPLAT_OIIO_MODULE if set (that file only), else vsplat-modules/
+ * next to the binary holding libvsplat's code, one folder up (build tree:
+ * tests/, bench/), under ../LIBDIR (installed bin/), then the installed
+ * library folder. */
+struct vs_context;
+const vs_oiio_api *vs_oiio(struct vs_context *ctx);
 
 #ifdef __cplusplus
 }

@@ -59,8 +59,11 @@ if [[ -e $LIBDIR/libvsplat.so.$VER && -L $LIBDIR/libvsplat.so.${VER%%.*} ]]; the
 objdump -p "$LIBDIR/libvsplat.so" >"$T/objdump" 2>&1 || true
 if grep -q "SONAME *libvsplat.so.${VER%%.*}$" "$T/objdump"; then ok; else
     bad "soname is not libvsplat.so.${VER%%.*}"; fi
-# the installed CLI and man page
+# the installed CLI and man page; the CLI finds the image module under ../LIBDIR
 if [[ $("$P/bin/vsplat" --version) == "vsplat $VER" ]]; then ok; else bad "installed vsplat --version"; fi
+if [[ -f $LIBDIR/vsplat-modules/vsplat-oiio.so ]]; then ok; else bad "not installed: vsplat-modules/vsplat-oiio.so"; fi
+if "$P/bin/vsplat" render --scene sphere --size 32x32 -o "$T/cli.png" >"$T/run" 2>&1 && [[ -s $T/cli.png ]]; then ok; else
+    bad "installed vsplat render -o PNG: $(head -c 600 "$T/run")"; fi
 if command -v man >/dev/null && MANPAGER=cat MANWIDTH=100 man -l "$P/share/man/man1/vsplat.1" >"$T/man" 2>/dev/null; then
     for w in render info compare --tf --turntable VSPLAT_THREADS VSPLAT_ISA VSPLAT_DATA EXIT; do
         if grep -q -- "$w" "$T/man"; then ok; else bad "man page lacks $w"; fi
@@ -83,7 +86,18 @@ CM
 if step "find_package configure" cmake -S "$T/cm" -B "$T/cm/b" -DCMAKE_PREFIX_PATH="$P" -DCMAKE_BUILD_TYPE=Release &&
     step "find_package build" cmake --build "$T/cm/b"; then
     check_run "find_package shared" "$T/cm/b/embed_shared"
-    check_run "find_package static + .1dt preset" "$T/cm/b/embed_static" "$ENGINE" "$T/cm/out.png"
+    # image I/O is a module: the shared library finds it beside itself...
+    check_run "find_package shared + image" "$T/cm/b/embed_shared" "$ENGINE" "$T/cm/out_shared.png"
+    if [[ -s $T/cm/out_shared.png ]]; then ok; else bad "the shared example wrote no image"; fi
+    # ...a program linked statically, outside the prefix, looks in the
+    # configured install folder (not this temporary prefix), says so, and
+    # takes VSPLAT_OIIO_MODULE
+    if "$T/cm/b/embed_static" "$ENGINE" "$T/cm/out.png" >"$T/run" 2>&1; then
+        bad "static example outside the prefix wrote an image without VSPLAT_OIIO_MODULE"
+    elif grep -q "cannot load the OpenImageIO module.*VSPLAT_OIIO_MODULE" "$T/run"; then ok; else
+        bad "static example without the module: $(head -c 600 "$T/run")"; fi
+    check_run "find_package static + .1dt preset" env VSPLAT_OIIO_MODULE="$LIBDIR/vsplat-modules/vsplat-oiio.so" \
+        "$T/cm/b/embed_static" "$ENGINE" "$T/cm/out.png"
     if [[ -s $T/cm/out.png ]]; then ok; else bad "the static example wrote no image"; fi
     ldd "$T/cm/b/embed_shared" >"$T/ldd" 2>&1 || true
     if grep -q "$LIBDIR/libvsplat.so" "$T/ldd"; then ok; else bad "embed_shared does not use the installed libvsplat.so: $(cat "$T/ldd")"; fi

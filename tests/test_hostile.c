@@ -835,15 +835,20 @@ static void test_nrrd_hostile(void)
 static void test_images_hostile(void)
 {
     char path[1100], err[400];
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) {
+        CHECK(0, "image I/O module: %s", vs_last_error(ctx));
+        return;
+    }
     enum { W = 8, H = 6 };
     uint8_t px[3 * W * H];
     for (int i = 0; i < 3 * W * H; i++) px[i] = (uint8_t)(i * 7);
     path_of(path, sizeof path, "valid.png");
-    CHECK(vs_oiio_write_pages(path, W, H, 1, 1, VS_PIX_U8, px, 0, 0, NULL, err, sizeof err) == VS_OK, "png: %s", err);
+    CHECK(io->write_pages(path, W, H, 1, 1, VS_PIX_U8, px, 0, 0, NULL, err, sizeof err) == VS_OK, "png: %s", err);
     size_t n;
     unsigned char *png = read_bytes(path, &n);
     path_of(path, sizeof path, "valid.tif");
-    CHECK(vs_oiio_write_pages(path, W, H, 1, 3, VS_PIX_U8, px, 2.0, 2.0, NULL, err, sizeof err) == VS_OK, "tif: %s",
+    CHECK(io->write_pages(path, W, H, 1, 3, VS_PIX_U8, px, 2.0, 2.0, NULL, err, sizeof err) == VS_OK, "tif: %s",
           err);
     size_t nt;
     unsigned char *tif = read_bytes(path, &nt);

@@ -472,12 +472,17 @@ static size_t tar_add(unsigned char *out, const char *name, const unsigned char 
 static void test_stacks(vs_context *ctx)
 {
     char path[1100], err[400];
+    const vs_oiio_api *io = vs_oiio(ctx);
+    if (!io) {
+        CHECK(0, "image I/O module: %s", vs_last_error(ctx));
+        return;
+    }
     enum { W = 9, H = 6, P = 3 };
     /* 3-page u16 ImageJ-style TIFF */
     uint16_t pages[P * W * H];
     for (int i = 0; i < P * W * H; i++) pages[i] = (uint16_t)(i * 211);
     path_of(path, sizeof path, "t_stack.tif");
-    vs_status st = vs_oiio_write_pages(path, W, H, 1, P, VS_PIX_U16, pages, 4.0, 2.0,
+    vs_status st = io->write_pages(path, W, H, 1, P, VS_PIX_U16, pages, 4.0, 2.0,
                                        "ImageJ=1.53t\nimages=3\nslices=3\nunit=micron\nspacing=2.5\n",
                                        err, sizeof err);
     CHECK(st == VS_OK, "write tiff: %s", err);
@@ -496,7 +501,7 @@ static void test_stacks(vs_context *ctx)
     for (int z = 0; z < P; z++) {
         char p[1200];
         snprintf(p, sizeof p, "%s/%s", path, fnames[z]);
-        st = vs_oiio_write_pages(p, W, H, 1, 1, VS_PIX_U8, sl[z], 0, 0, NULL, err, sizeof err);
+        st = io->write_pages(p, W, H, 1, 1, VS_PIX_U8, sl[z], 0, 0, NULL, err, sizeof err);
         CHECK(st == VS_OK, "write png: %s", err);
     }
     {
@@ -555,7 +560,7 @@ static void test_stacks(vs_context *ctx)
         rgb[3 * i + 2] = (uint8_t)i;
     }
     path_of(path, sizeof path, "t_rgb.png");
-    st = vs_oiio_write_pages(path, W, H, 3, 1, VS_PIX_U8, rgb, 0, 0, NULL, err, sizeof err);
+    st = io->write_pages(path, W, H, 3, 1, VS_PIX_U8, rgb, 0, 0, NULL, err, sizeof err);
     CHECK(st == VS_OK, "write rgb png: %s", err);
     v = load(ctx, path, NULL);
     check_shape(v, "rgb png", W, H, 1, VS_U8, 1, 1, 1, 0);
@@ -575,9 +580,9 @@ static void test_stacks(vs_context *ctx)
     {
         char p[1200];
         snprintf(p, sizeof p, "%s/0.png", path);
-        vs_oiio_write_pages(p, W, H, 1, 1, VS_PIX_U8, sl[0], 0, 0, NULL, err, sizeof err);
+        io->write_pages(p, W, H, 1, 1, VS_PIX_U8, sl[0], 0, 0, NULL, err, sizeof err);
         snprintf(p, sizeof p, "%s/1.png", path);
-        vs_oiio_write_pages(p, H, W, 1, 1, VS_PIX_U8, sl[1], 0, 0, NULL, err, sizeof err);
+        io->write_pages(p, H, W, 1, 1, VS_PIX_U8, sl[1], 0, 0, NULL, err, sizeof err);
     }
     expect_fail(ctx, path, NULL, "folder of mixed sizes");
 }
@@ -731,6 +736,50 @@ static void test_hostile(vs_context *ctx)
     expect_fail(ctx, path, &o, "zero spacing override");
 }
 
+/* Does this process have OpenImageIO mapped? */
+static int oiio_mapped(void)
+{
+    FILE *f = fopen("/proc/self/maps", "r");
+    if (!f) return -1;
+    char line[4096];
+    int found = 0;
+    while (!found && fgets(line, sizeof line, f)) found = strstr(line, "libOpenImageIO") != NULL;
+    fclose(f);
+    return found;
+}
+
+/* Image I/O is a module loaded on first use (src/oiio_adapter.h): loading a
+ * NIfTI volume and rendering it must not map OpenImageIO (its 260 libraries
+ * cost 130 MB and 0.15 s a start); the first image write loads it. */
+static void test_io_module_lazy(vs_context *ctx)
+{
+    if (oiio_mapped() < 0) {
+        printf("SKIP lazy image module: no /proc/self/maps\n");
+        return;
+    }
+    CHECK(oiio_mapped() == 0, "OpenImageIO mapped at start: the library links it again");
+    enum { N = 12 };
+    uint8_t vox[N * N * N];
+    for (int i = 0; i < N * N * N; i++) vox[i] = (uint8_t)(i % 7 == 0 ? 200 : 10);
+    char path[1100];
+    path_of(path, sizeof path, "lazy.nii");
+    const int dims[4] = {N, N, N, 1};
+    const float unit[3] = {1, 1, 1};
+    write_nifti(path, 3, dims, DT_U8, 8, unit, 0.0f, 0.0f, vox, sizeof vox);
+    vs_volume *v = load(ctx, path, NULL);
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 32;
+    vs_image img = {0, 0, NULL};
+    CHECK(v && vs_render(ctx, v, &s, &img, NULL) == VS_OK, "render: %s", vs_last_error(ctx));
+    CHECK(oiio_mapped() == 0, "loading a NIfTI volume and rendering it mapped OpenImageIO");
+    path_of(path, sizeof path, "lazy.png");
+    CHECK(vs_image_write(ctx, path, &img, 8) == VS_OK, "write: %s", vs_last_error(ctx));
+    CHECK(oiio_mapped() == 1, "an image was written without mapping OpenImageIO?");
+    vs_image_free(&img);
+    vs_volume_release(v);
+}
+
 int main(void)
 {
     vs_context *ctx;
@@ -741,6 +790,7 @@ int main(void)
         return 1;
     }
     printf("temporary files in %s\n", tmp);
+    test_io_module_lazy(ctx);
     test_real(ctx);
     test_nifti(ctx);
     test_nrrd(ctx);
