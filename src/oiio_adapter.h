@@ -110,9 +110,9 @@ const vs_oiio_api *vs_oiio_module_api(void);
 /* The table for this context, loading the module on first use; NULL (and
  * the context's error says why and where it looked) if it cannot be loaded.
  * Search: $VSPLAT_OIIO_MODULE if set (that file only), else vsplat-modules/
- * next to the binary holding libvsplat's code, one folder up (build tree:
- * tests/, bench/), under ../LIBDIR (installed bin/), then the installed
- * library folder. */
+ * next to the binary holding libvsplat's code, one or two folders up
+ * (build tree: tests/, bench/, tests/fuzz/), under ../LIBDIR (installed
+ * bin/), then the installed library folder. */
 struct vs_context;
 const vs_oiio_api *vs_oiio(struct vs_context *ctx);
 

@@ -66,7 +66,10 @@ const vs_oiio_api *vs_oiio(vs_context *ctx)
         if (slash) *slash = '\0';
         else snprintf(dir, sizeof dir, ".");
     }
-    const char *rel[] = {"", "/..", "/../" VS_INSTALL_LIBDIR};
+    /* beside it (libvsplat.so, build/vsplat), one or two folders up (the
+     * build tree's tests/, bench/, tests/fuzz/), under ../LIBDIR (bin/) */
+    static const char up_libdir[] = "/../" VS_INSTALL_LIBDIR;
+    const char *rel[] = {"", "/..", "/../..", up_libdir};
     char path[PATH_MAX + 64];
     for (size_t i = 0; dir[0] && i < sizeof rel / sizeof *rel; i++) {
         snprintf(path, sizeof path, "%s%s/vsplat-modules/%s", dir, rel[i], VS_OIIO_MODULE_NAME);
@@ -76,8 +79,8 @@ const vs_oiio_api *vs_oiio(vs_context *ctx)
     snprintf(path, sizeof path, "%s/%s", VS_INSTALL_MODULEDIR, VS_OIIO_MODULE_NAME);
     if (!access(path, R_OK) && (ctx->oiio = try_open(path, &ctx->oiio_handle, why, sizeof why))) return ctx->oiio;
     vs_set_error(ctx, VS_ERR_IO,
-                 "image I/O: cannot load the OpenImageIO module %s (looked in vsplat-modules/ beside, above and "
-                 "under ../%s from %s, and in %s%s%s); set %s to its path",
+                 "image I/O: cannot load the OpenImageIO module %s (looked in vsplat-modules/ in, one and two "
+                 "folders above, and under ../%s from %s, and in %s%s%s); set %s to its path",
                  VS_OIIO_MODULE_NAME, VS_INSTALL_LIBDIR, dir[0] ? dir : "(unknown)", VS_INSTALL_MODULEDIR,
                  why[0] ? ": " : "", why, VS_OIIO_MODULE_ENV);
     return NULL;
