@@ -77,7 +77,14 @@ vs_status vs_classify_setup(vs_context *ctx, const struct vs_volume *vol, const 
         c->hi = s->tf[s->tf_count - 1].value;
         c->ramp = 0.0;
     } else {
-        double lo = s->has_iso ? s->iso_lo : vs_volume_default_iso(vol);
+        double lo = s->iso_lo;
+        if (!s->has_iso) {
+            if (ctx->otsu_serial != vol->serial) {
+                ctx->otsu_iso = vs_volume_default_iso(vol);
+                ctx->otsu_serial = vol->serial;
+            }
+            lo = ctx->otsu_iso;
+        }
         double hi = s->has_iso ? s->iso_hi : INFINITY;
         if (!s->has_iso && isfinite(vol->default_iso)) lo = vol->default_iso;
         if (isnan(lo) || isnan(hi))

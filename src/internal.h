@@ -69,6 +69,10 @@ struct vs_context {
     int pool_threads;
     int pool_pin;
     struct vs_relevant_cache *relevant; /* relevant-voxel list, reused          */
+    uint64_t otsu_serial;               /* default iso (Otsu) of the volume with
+                                           this serial (0: none): a full pass
+                                           over the volume, once, not per frame */
+    double otsu_iso;
     const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */
     void *oiio_handle;                  /* its dlopen handle                     */
 };

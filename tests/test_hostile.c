@@ -113,6 +113,36 @@ static void test_context_and_names(void)
     free(buf);
 }
 
+/* The default iso-value (Otsu, a pass over the whole volume) is kept in the
+ * context per volume, not recomputed each frame: data rewritten in place
+ * (vs_volume_update_range) must give the new volume's value. */
+static void test_default_iso_follows_data(void)
+{
+    const int dims[3] = {16, 16, 16};
+    vs_volume *v = NULL;
+    if (vs_volume_create(ctx, VS_F32, dims, NULL, &v) != VS_OK) {
+        CHECK(0, "create: %s", vs_last_error(ctx));
+        return;
+    }
+    float *f = vs_volume_data(v);
+    for (int i = 0; i < 16 * 16 * 16; i++) f[i] = (i % 16) < 8 ? 10.0f : 90.0f + (float)(i % 3);
+    vs_volume_update_range(v);
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 16;
+    vs_image img = {0, 0, NULL};
+    vs_stats st;
+    for (int round = 0; round < 2; round++) {
+        double want = vs_volume_default_iso(v);
+        CHECK(vs_render(ctx, v, &s, &img, &st) == VS_OK, "render: %s", vs_last_error(ctx));
+        vs_image_free(&img);
+        CHECK(st.iso_lo == want, "round %d: default iso %g, the volume's is %g", round, st.iso_lo, want);
+        for (int i = 0; i < 16 * 16 * 16; i++) f[i] = 4.0f * f[i] + 1000.0f; /* the next round's data */
+        vs_volume_update_range(v);
+    }
+    vs_volume_release(v);
+}
+
 static void test_volume_api(void)
 {
     vs_volume *v = (vs_volume *)1;
@@ -999,6 +1029,7 @@ int main(void)
     printf("temporary files in %s\n", tmp);
     test_context_and_names();
     test_volume_api();
+    test_default_iso_follows_data();
     test_render_api();
     test_image_api();
     test_shade_lut_nonfinite();
