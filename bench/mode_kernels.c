@@ -16,7 +16,7 @@ typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
     int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
-                 8 gradient-splat block (mixing) */
+                 8 gradient-splat block (mixing), 9 project_brick (8n voxels) */
     void *fn;
 } kernel_entry;
 
@@ -37,6 +37,11 @@ typedef struct shade_bench {
     uint16_t lambda_bin[255 * 255 + 2], phi_bin[255 * 181 + 2];
     uint8_t radius[255 * 255 + 4];
     vs_shade_tabs T;
+    /* project_brick: a brick's offsets in the order the list stores them,
+     * a 45-degree view, a window that keeps about a third of the voxels */
+    uint16_t vox[VS_PROJECT_MAX], keep[VS_PROJECT_MAX];
+    float xyz[3 * VS_PROJECT_MAX];
+    vs_project_in P;
 } shade_bench;
 
 static void shade_bench_init(shade_bench *B)
@@ -66,6 +71,11 @@ static void shade_bench_init(shade_bench *B)
     }
     for (int i = 0; i < 255 * 181; i++) B->phi_bin[i] = (uint16_t)(RND() * SHADE_NP);
 #undef RND
+    for (int i = 0; i < VS_PROJECT_MAX; i++) B->vox[i] = (uint16_t)i;
+    const float c = 1.6f, sn = 1.6f; /* 2.26 px per voxel, turned 45 degrees */
+    B->P = (vs_project_in){.base = {100.0f, 100.0f, 50.0f},
+                           .m = {{c, 0.0f, sn}, {0.0f, 2.26f, 0.0f}, {-sn, 0.0f, c}},
+                           .px = 5.5f, .py = 5.5f, .bx0 = 90.0f, .bx1 = 113.0f, .by0 = 80.0f, .by1 = 100.0f};
     B->T = (vs_shade_tabs){.vmin = 0.0, .scale = 4095.0 / 100.0, .alpha = B->atab, .color = B->color,
                            .slab = 0.5f, .two_slab = 1.0f, .ppm = 1.0f, .zpm = 1.0f, .nl = SHADE_NL,
                            .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,
@@ -110,6 +120,10 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 if ((r & 1023) == 0) memcpy(B->g, B->g0, sizeof B->g);
                 ((vs_shade_lut_fn)k->fn)(B->g + 3 * off, B->alpha + off, B->q + off, 1, n, &B->T);
                 break;
+            case 9: {
+                volatile int kept = ((vs_project_brick_fn)k->fn)(B->vox, 8 * n, &B->P, B->keep, B->xyz);
+                (void)kept;
+            } break;
             case 7:
                 /* the sheet rows as (density, gx, gy, gz) pixels */
                 ((vs_classify_gs_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 4 * off, n, &B->T);
@@ -123,7 +137,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : n;
+    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : n;
     return best * 1e6 / ((double)reps * elems);
 }
 
@@ -176,6 +190,9 @@ int bench_kernels(const bench_opts *o)
         {"classify_gs", VS_ISA_AVX2, 7, (void *)vs_classify_gs_avx2},
         {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
         {"shade_lut", VS_ISA_AVX2, 6, (void *)vs_shade_lut_avx2},
+        {"project_brick", VS_ISA_SCALAR, 9, (void *)vs_project_brick_scalar},
+        {"project_brick", VS_ISA_AVX2, 9, (void *)vs_project_brick_avx2},
+        {"project_brick", VS_ISA_AVX512, 9, (void *)vs_project_brick_avx512},
     };
     const int lengths[] = {9, 64};
     const int nmax = 64 + 64 + 8;

@@ -155,3 +155,21 @@ void vs_splat_block_mix_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdi
         }
     }
 }
+
+int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz)
+{
+    int q = 0;
+    for (int i = 0; i < n; i++) {
+        const float di = (float)(vox[i] & 7), dj = (float)((vox[i] >> 3) & 7), dk = (float)(vox[i] >> 6);
+        const float x = P->base[0] + P->m[0][0] * di + P->m[0][1] * dj + P->m[0][2] * dk;
+        const float y = P->base[1] + P->m[1][0] * di + P->m[1][1] * dj + P->m[1][2] * dk;
+        const float z = P->base[2] + P->m[2][0] * di + P->m[2][1] * dj + P->m[2][2] * dk;
+        if (x + P->px < P->bx0 || x - P->px > P->bx1 || y + P->py < P->by0 || y - P->py > P->by1) continue;
+        keep[q] = (uint16_t)i;
+        xyz[3 * q] = x;
+        xyz[3 * q + 1] = y;
+        xyz[3 * q + 2] = z;
+        q++;
+    }
+    return q;
+}

@@ -36,6 +36,18 @@ typedef struct vs_shade_tabs {
 /* Entries of the classification tables (VS_TF_TABLE in internal.h). */
 #define VS_KTAB 4096
 
+/* What project_brick needs: the view position of a brick's corner voxel,
+ * the view matrix, and the box a voxel centre must reach to be kept (a
+ * tile's buffer widened by the footprint: +-INFINITY keeps every voxel). */
+typedef struct vs_project_in {
+    float base[3];
+    float m[3][3];
+    float px, py;          /* footprint half-extent (pixels)              */
+    float bx0, bx1, by0, by1; /* the buffer's first and last pixel centres */
+} vs_project_in;
+/* Most voxels one brick holds (VS_BRICK^3, src/relevant.h). */
+#define VS_PROJECT_MAX 512
+
 typedef struct vs_kernels {
     vs_isa isa; /* the ISA cap in force (what the stats report) */
     /* row[i] += w * ex[i], i in [0, n) */
@@ -75,6 +87,13 @@ typedef struct vs_kernels {
      * table at v[i * vstride], plus specular, replaces g[3i..]; other
      * pixels are left alone */
     void (*shade_lut)(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
+    /* voxel transform and binning: for the n (<= VS_PROJECT_MAX) voxels of a
+     * brick, vox[i] = di | dj << 3 | dk << 6, the view position
+     *   x = ((base[0] + m[0][0] di) + m[0][1] dj) + m[0][2] dk   (y, z alike)
+     * and, for those with !(x + px < bx0 || x - px > bx1 || y + py < by0 ||
+     * y - py > by1), in order: keep[q] = i, xyz[3q..3q+2] = x, y, z.
+     * Returns how many were kept. */
+    int (*project_brick)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 } vs_kernels;
 
 /* Scalar reference kernels (src/kernels.c). */
@@ -95,6 +114,10 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
                            ptrdiff_t stride, int n, const vs_shade_tabs *T);
 void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
+typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
+int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
+int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
+int vs_project_brick_avx512(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 
 /* The per-ISA versions in simd/ (declared once here for the dispatch, the
  * tests and the kernel benchmark; call them only where the CPU has the ISA). */

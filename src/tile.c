@@ -403,6 +403,9 @@ static void voxel_box(const vs_frame *F, float x, float y, float z, float box[4]
     *sc = (float)vs_camera_scale(&F->cam, zn);
 }
 
+_Static_assert(VS_BRICK == 8 && VS_PROJECT_MAX >= VS_BRICK * VS_BRICK * VS_BRICK,
+               "project_brick (src/kernels.h) decodes 3-bit brick offsets of at most 512 voxels");
+
 /* Open brick b: cull it whole if its footprints can only land on opaque
  * pixels, else project its voxels and bucket those that reach this tile. */
 static void expand_brick(tile_state *ts, uint32_t b, int opening)
@@ -435,21 +438,32 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
     const float near_z = (float)F->cam.near_z;
     const uint32_t row = (uint32_t)F->vol->dims[0], plane = row * (uint32_t)F->vol->dims[1];
     const uint32_t first = br->i0 + row * br->j0 + plane * br->k0; /* linear index of the brick's corner */
-    for (uint32_t n = br->start; n < br->start + br->count; n++) {
-        const vs_voxel vx = F->rel->voxels[n];
-        const uint32_t ui = VS_VOXEL_DI(vx), uj = VS_VOXEL_DJ(vx), uk = VS_VOXEL_DK(vx);
-        const uint32_t v = first + ui + row * uj + plane * uk;
-        const float di = (float)ui, dj = (float)uj, dk = (float)uk;
-        float x = base[0] + m[0][0] * di + m[0][1] * dj + m[0][2] * dk;
-        float y = base[1] + m[1][0] * di + m[1][1] * dj + m[1][2] * dk;
-        float z = base[2] + m[2][0] * di + m[2][1] * dj + m[2][2] * dk;
-        float box[4] = {x, x, y, y}, sc = 1.0f;
+    /* transform and bin (a kernel); with perspective the box test follows
+     * per voxel, as its footprint's size depends on its depth */
+    vs_project_in P;
+    memcpy(P.base, base, sizeof base);
+    memcpy(P.m, m, sizeof m);
+    P.px = px;
+    P.py = py;
+    P.bx0 = F->cam.persp ? -INFINITY : bx0;
+    P.bx1 = F->cam.persp ? INFINITY : bx1;
+    P.by0 = F->cam.persp ? -INFINITY : by0;
+    P.by1 = F->cam.persp ? INFINITY : by1;
+    uint16_t keep[VS_PROJECT_MAX];
+    float xyz[3 * VS_PROJECT_MAX];
+    const vs_voxel *vox = F->rel->voxels + br->start;
+    const int nkeep = F->kern.project_brick(vox, (int)br->count, &P, keep, xyz);
+    for (int q = 0; q < nkeep; q++) {
+        const vs_voxel vx = vox[keep[q]];
+        const uint32_t v = first + VS_VOXEL_DI(vx) + row * VS_VOXEL_DJ(vx) + plane * VS_VOXEL_DK(vx);
+        const float x = xyz[3 * q], y = xyz[3 * q + 1], z = xyz[3 * q + 2];
         if (F->cam.persp) {
+            float box[4] = {x, x, y, y}, sc = 1.0f;
             if (z - rz < near_z) continue; /* the kernel crosses the near plane */
             voxel_box(F, x, y, z, box, &sc);
+            if (box[1] + px * sc < bx0 || box[0] - px * sc > bx1 || box[3] + py * sc < by0 || box[2] - py * sc > by1)
+                continue; /* not this tile */
         }
-        if (box[1] + px * sc < bx0 || box[0] - px * sc > bx1 || box[3] + py * sc < by0 || box[2] - py * sc > by1)
-            continue; /* not this tile */
         int kf = (int)floorf((z - rz) / slab), kl = (int)floorf((z + rz) / slab);
         if (kf < opening) kf = opening; /* rounding guard: the brick bound is conservative */
         if (kl > ts->kmax) kl = ts->kmax;

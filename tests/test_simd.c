@@ -365,6 +365,88 @@ static void shade_off(float *g, const float *alpha, const float *v, int vstride,
 }
 
 /* The dispatch honours the cap and never goes past the CPU. */
+/* project_brick: random bricks (offsets in any order, counts 0..512),
+ * random view matrices and tile windows, windows that keep everything
+ * (+-INFINITY), and windows whose edges sit exactly on a voxel's x + px or
+ * y - py, and one float past it (the comparisons are strict).  Kept indices,
+ * positions and the count must equal the reference's bit for bit; outputs
+ * past the count must be untouched.  Returns the number of mismatching cases. */
+static int check_project(const char *isa, vs_project_brick_fn fn)
+{
+    enum { M = VS_PROJECT_MAX, G = 16 };
+    static uint16_t vox[M], kr[M + G], ko[M + G];
+    static float xr[3 * (M + G)], xo[3 * (M + G)];
+    const int sizes[] = {0, 1, 2, 7, 8, 9, 15, 16, 17, 31, 33, 47, 48, 49, 63, 64, 65, 100, 255, 256, 511, 512};
+    int bad = 0, cases = 0;
+    for (int trial = 0; trial < 40; trial++)
+        for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++) {
+            const int n = sizes[si];
+            for (int i = 0; i < n; i++) vox[i] = (uint16_t)((unsigned)((frand() + 1.0f) * 256.0f) & 511u);
+            vs_project_in P;
+            for (int r = 0; r < 3; r++) {
+                P.base[r] = 300.0f * frand();
+                for (int a = 0; a < 3; a++) P.m[r][a] = 3.0f * frand();
+            }
+            P.px = 2.0f + 4.0f * (frand() + 1.0f);
+            P.py = 2.0f + 4.0f * (frand() + 1.0f);
+            const int mode = trial % 4;
+            if (mode == 0) { /* keep all */
+                P.bx0 = P.by0 = -INFINITY;
+                P.bx1 = P.by1 = INFINITY;
+            } else {
+                P.bx0 = P.base[0] + 40.0f * frand();
+                P.bx1 = P.bx0 + 10.0f + 30.0f * (frand() + 1.0f);
+                P.by0 = P.base[1] + 40.0f * frand();
+                P.by1 = P.by0 + 10.0f + 30.0f * (frand() + 1.0f);
+                if (mode >= 2 && n > 0) { /* an edge exactly on a voxel, or one float past it */
+                    uint16_t v = vox[n / 2];
+                    float di = (float)(v & 7), dj = (float)((v >> 3) & 7), dk = (float)(v >> 6);
+                    float x = P.base[0] + P.m[0][0] * di + P.m[0][1] * dj + P.m[0][2] * dk;
+                    float y = P.base[1] + P.m[1][0] * di + P.m[1][1] * dj + P.m[1][2] * dk;
+                    P.bx0 = x + P.px;
+                    P.by1 = y - P.py;
+                    if (mode == 3) {
+                        P.bx0 = nextafterf(P.bx0, INFINITY);
+                        P.by1 = nextafterf(P.by1, -INFINITY);
+                    }
+                    P.bx1 = P.bx0 + 50.0f;
+                    P.by0 = P.by1 - 50.0f;
+                }
+            }
+            for (int i = 0; i < M + G; i++) kr[i] = ko[i] = 0xBEEF;
+            for (int i = 0; i < 3 * (M + G); i++) xr[i] = xo[i] = -7.5f;
+            int qr = vs_project_brick_scalar(vox, n, &P, kr, xr);
+            int qo = fn(vox, n, &P, ko, xo);
+            cases++;
+            int same = qr == qo && !memcmp(kr, ko, sizeof kr) && !memcmp(xr, xo, sizeof xr);
+            if (!same) {
+                bad++;
+                if (isa) CHECK(0, "project_brick %s: n %d trial %d: kept %d vs %d (reference)", isa, n, trial, qo, qr);
+            }
+        }
+    if (isa) printf("project_brick %s: %d cases\n", isa, cases);
+    return bad;
+}
+
+/* a deliberately wrong projection: the left window edge compared with <= */
+static int project_off(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz)
+{
+    int q = 0;
+    for (int i = 0; i < n; i++) {
+        const float di = (float)(vox[i] & 7), dj = (float)((vox[i] >> 3) & 7), dk = (float)(vox[i] >> 6);
+        const float x = P->base[0] + P->m[0][0] * di + P->m[0][1] * dj + P->m[0][2] * dk;
+        const float y = P->base[1] + P->m[1][0] * di + P->m[1][1] * dj + P->m[1][2] * dk;
+        const float z = P->base[2] + P->m[2][0] * di + P->m[2][1] * dj + P->m[2][2] * dk;
+        if (x + P->px <= P->bx0 || x - P->px > P->bx1 || y + P->py < P->by0 || y - P->py > P->by1) continue;
+        keep[q] = (uint16_t)i;
+        xyz[3 * q] = x;
+        xyz[3 * q + 1] = y;
+        xyz[3 * q + 2] = z;
+        q++;
+    }
+    return q;
+}
+
 static void check_dispatch(void)
 {
     vs_isa best = vs_isa_detect();
@@ -398,6 +480,7 @@ int main(void)
     CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
     CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     CHECK(check_block_mix(NULL, block_mix_off), "check_block_mix cannot tell a wrong kernel from the reference");
+    CHECK(check_project(NULL, project_off), "check_project cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
@@ -415,12 +498,14 @@ int main(void)
         check_classify_gs("avx2", vs_classify_gs_avx2, &fx);
         check_shade("avx2", vs_shade_lut_avx2, &fx);
         check_composite("avx2", vs_composite_avx2);
+        check_project("avx2", vs_project_brick_avx2);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
     if (best >= VS_ISA_AVX512) {
         check_row4("avx512", vs_splat_row4_avx512, 0, NULL);
         check_block("avx512", vs_splat_block_avx512);
+        check_project("avx512", vs_project_brick_avx512);
     } else {
         printf("SKIP: avx512 kernels: this CPU has no AVX-512\n");
     }
