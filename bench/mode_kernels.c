@@ -16,13 +16,14 @@ typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
     int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
-                 8 gradient-splat block (mixing), 9 project_brick (8n voxels) */
+                 8 gradient-splat block (mixing), 9 project_brick (8n voxels),
+                 10 splat_voxel1 (8 rows of 8/64 floats into 4 sheets) */
     void *fn;
 } kernel_entry;
 
 /* Footprint blocks: 8 rows of n floats (n rounded down to whole 8-float
  * vectors, at least one) into a sheet row stride of 200 floats. */
-enum { BLOCK_ROWS = 8, BLOCK_DS = 200 };
+enum { BLOCK_ROWS = 8, BLOCK_DS = 200, SHEET_STEP = BLOCK_ROWS * BLOCK_DS + 64 /* splat_voxel1: 4 sheets */ };
 static int block_nvec(int n) { return n < 8 ? 1 : n / 8; }
 
 /* Post-shaded sheet kernels: a density sheet of 3 rows of SHEET_S floats
@@ -120,6 +121,11 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 if ((r & 1023) == 0) memcpy(B->g, B->g0, sizeof B->g);
                 ((vs_shade_lut_fn)k->fn)(B->g + 3 * off, B->alpha + off, B->q + off, 1, n, &B->T);
                 break;
+            case 10: {
+                float *d4[4] = {buf + off, buf + off + SHEET_STEP, buf + off + 2 * SHEET_STEP, buf + off + 3 * SHEET_STEP};
+                const float w4s[4] = {0.25f, 0.5f, 0.75f, 1.0f};
+                ((vs_splat_voxel1_fn)k->fn)(d4, w4s, 4, BLOCK_DS, ex, ex + 64, BLOCK_ROWS, block_nvec(n), 1e-6f);
+            } break;
             case 9: {
                 volatile int kept = ((vs_project_brick_fn)k->fn)(B->vox, 8 * n, &B->P, B->keep, B->xyz);
                 (void)kept;
@@ -137,7 +143,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : n;
+    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS : n;
     return best * 1e6 / ((double)reps * elems);
 }
 
@@ -190,6 +196,9 @@ int bench_kernels(const bench_opts *o)
         {"classify_gs", VS_ISA_AVX2, 7, (void *)vs_classify_gs_avx2},
         {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
         {"shade_lut", VS_ISA_AVX2, 6, (void *)vs_shade_lut_avx2},
+        {"splat_voxel1", VS_ISA_SCALAR, 10, (void *)vs_splat_voxel1_scalar},
+        {"splat_voxel1", VS_ISA_AVX2, 10, (void *)vs_splat_voxel1_avx2},
+        {"splat_voxel1", VS_ISA_AVX512, 10, (void *)vs_splat_voxel1_avx512},
         {"project_brick", VS_ISA_SCALAR, 9, (void *)vs_project_brick_scalar},
         {"project_brick", VS_ISA_AVX2, 9, (void *)vs_project_brick_avx2},
         {"project_brick", VS_ISA_AVX512, 9, (void *)vs_project_brick_avx512},
@@ -197,8 +206,7 @@ int bench_kernels(const bench_opts *o)
     const int lengths[] = {9, 64};
     const int nmax = 64 + 64 + 8;
     /* rows of 4 channels, or BLOCK_ROWS sheet rows of a block */
-    const size_t nbuf = (size_t)BLOCK_ROWS * BLOCK_DS + 64 > (size_t)nmax * 4 ? (size_t)BLOCK_ROWS * BLOCK_DS + 64
-                                                                             : (size_t)nmax * 4;
+    const size_t nbuf = (size_t)4 * SHEET_STEP + 64 > (size_t)nmax * 4 ? (size_t)4 * SHEET_STEP + 64 : (size_t)nmax * 4;
     float *buf = calloc(nbuf, sizeof(float)), *ex = malloc((size_t)8 * nmax * sizeof(float));
     float *exd = malloc((size_t)nmax * sizeof(float)), *alpha = malloc((size_t)nmax * sizeof(float));
     float *rgb = malloc(((size_t)nmax * 3 + 1) * sizeof(float));

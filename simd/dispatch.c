@@ -33,6 +33,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->classify_gs = vs_classify_gs_scalar;
     k->shade_lut = vs_shade_lut_scalar;
     k->project_brick = vs_project_brick_scalar;
+    k->splat_voxel1 = vs_splat_voxel1_scalar;
 #if defined(__x86_64__) || defined(__i386__)
     if (cap >= VS_ISA_SSE4) {
         k->isa = VS_ISA_SSE4;
@@ -52,12 +53,14 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->shade_lut = vs_shade_lut_avx2;
         k->composite = vs_composite_avx2;
         k->project_brick = vs_project_brick_avx2;
+        k->splat_voxel1 = vs_splat_voxel1_avx2;
     }
     if (cap >= VS_ISA_AVX512) {
         k->isa = VS_ISA_AVX512;
         k->splat_row4 = vs_splat_row4_avx512;
         k->splat_block = vs_splat_block_avx512;
         k->project_brick = vs_project_brick_avx512;
+        k->splat_voxel1 = vs_splat_voxel1_avx512;
     }
 #endif
 }

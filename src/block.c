@@ -187,6 +187,15 @@ static void lerp(float *out, const float *t0, const float *t1, float f, int a, i
     for (int i = a; i < b; i++) out[i] = t0[i] + f * (t1[i] - t0[i]);
 }
 
+void vs_block_factors(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *cw,
+                      float *rw)
+{
+    const int i0 = v0 * 8 / g->ch, i1 = v1 * 8 / g->ch;
+    const float *c0 = g->colw + (size_t)p->qx * g->bx + i0, *r0 = g->roww + (size_t)p->qy * g->ny + j0;
+    lerp(cw, c0, c0 + g->bx, p->fx, 0, i1 - i0);
+    lerp(rw, r0, r0 + g->ny, p->fy, 0, j1 - j0);
+}
+
 void vs_block_build(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *blk)
 {
     const int stride = 8 * g->nvec;

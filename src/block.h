@@ -93,6 +93,13 @@ static inline void vs_block_place_at(const vs_block_geom *g, float cx, float cy,
  * 8 nvec floats). */
 void vs_block_build(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *blk);
 
+/* The factors of rows [j0, j1) and vectors [v0, v1) of the block of a
+ * one-channel (density) footprint: pixel i of row j is cw[i - 8 v0] *
+ * rw[j - j0], kept where > g->thr (vs_kernels.splat_voxel1 builds the
+ * rows from them in registers, vs_block_build into memory). */
+void vs_block_factors(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *cw,
+                      float *rw);
+
 /* Most pixels a block row or column may span (vs_block_setup refuses more). */
 #define VS_BLOCK_MAX_SPAN 4096
 

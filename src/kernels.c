@@ -173,3 +173,20 @@ int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, 
     }
     return q;
 }
+
+void vs_splat_voxel1_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            int rows, int nvec, float thr)
+{
+    float h[VS_VOXEL1_MAX];
+    const int n = 8 * nvec;
+    for (int r = 0; r < rows; r++) {
+        for (int i = 0; i < n; i++) {
+            const float v = cw[i] * rw[r];
+            h[i] = v > thr ? v : 0.0f;
+        }
+        for (int s = 0; s < ns; s++) {
+            float *d = dst[s] + r * ds;
+            for (int i = 0; i < n; i++) d[i] += w[s] * h[i];
+        }
+    }
+}

@@ -45,6 +45,9 @@ typedef struct vs_project_in {
     float px, py;          /* footprint half-extent (pixels)              */
     float bx0, bx1, by0, by1; /* the buffer's first and last pixel centres */
 } vs_project_in;
+/* Widest row splat_voxel1 takes (floats); wider footprints use blocks in
+ * memory (splat_block). */
+#define VS_VOXEL1_MAX 64
 /* Most voxels one brick holds (VS_BRICK^3, src/relevant.h). */
 #define VS_PROJECT_MAX 512
 
@@ -94,6 +97,12 @@ typedef struct vs_kernels {
      * y - py > by1), in order: keep[q] = i, xyz[3q..3q+2] = x, y, z.
      * Returns how many were kept. */
     int (*project_brick)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
+    /* one density voxel into every sheet it reaches (post-cd; a footprint
+     * block built in registers and added at once, src/block.h): row r of
+     * the block is h[i] = cw[i] rw[r], 0 where not > thr, i < 8 nvec, and
+     *   dst[s][r ds + i] += w[s] h[i],  s < ns, r < rows */
+    void (*splat_voxel1)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                         int rows, int nvec, float thr);
 } vs_kernels;
 
 /* Scalar reference kernels (src/kernels.c). */
@@ -114,6 +123,14 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
                            ptrdiff_t stride, int n, const vs_shade_tabs *T);
 void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
+typedef void (*vs_splat_voxel1_fn)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
+                                   const float *rw, int rows, int nvec, float thr);
+void vs_splat_voxel1_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            int rows, int nvec, float thr);
+void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                          int rows, int nvec, float thr);
+void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            int rows, int nvec, float thr);
 typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);

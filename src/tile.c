@@ -599,15 +599,33 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
         if (v1 > g->nvec) v1 = g->nvec;
         if (j0 >= j1 || v0 >= v1) continue;
-        vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
         const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
-        const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
         const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
         const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
         float wv[4];
         voxel_weights(F, e->v, wv);
         float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
         depth_weights(&F->fp, e->z, opening, e->kl, pl == VS_PIPELINE_POST_GS, D, E);
+        if (pl == VS_PIPELINE_POST_CD && 8 * (v1 - v0) <= VS_VOXEL1_MAX) {
+            /* density: the block is built in registers and added to every
+             * sheet in one kernel call */
+            float cw[VS_VOXEL1_MAX], rw[VS_BLOCK_MAX_SPAN], w[VS_MAX_VSPAN];
+            float *dst[VS_MAX_VSPAN];
+            int ns = 0;
+            for (int k = opening; k <= e->kl; k++) {
+                if (!(D[k - opening] > 0.0f)) continue;
+                const int slot = (k - kbase) % R;
+                dst[ns] = ring[slot] + off;
+                w[ns++] = wv[0] * D[k - opening];
+                merge_box(&bbs[slot], &box);
+            }
+            ts->ws->splatted += (uint64_t)ns;
+            vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
+            F->kern.splat_voxel1(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+            continue;
+        }
+        vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
+        const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
         for (int k = opening; k <= e->kl; k++) {
             const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f,
                                  1.0f, 1.0f, NULL};

@@ -447,6 +447,60 @@ static int project_off(const uint16_t *vox, int n, const vs_project_in *P, uint1
     return q;
 }
 
+/* splat_voxel1: 0..9 rows, 1..8 vectors (odd counts: the AVX-512 tail),
+ * 0..6 sheets at distinct unaligned places in one buffer, row weights across the
+ * threshold (products exactly at, just above and below it), NaN and -0 column
+ * weights; every float of the buffer, guards included, must equal the
+ * reference's.  Returns the number of mismatching cases. */
+static int check_voxel1(const char *isa, vs_splat_voxel1_fn fn)
+{
+    enum { DS = 150, ROWS = 9, NB = 7 * DS * 10 + 200 };
+    static float ref[NB], out[NB];
+    float cw[VS_VOXEL1_MAX], rw[ROWS], w[8];
+    int bad = 0, cases = 0;
+    for (int nvec = 1; nvec <= VS_VOXEL1_MAX / 8; nvec++)
+        for (int rows = 0; rows <= ROWS; rows++)
+            for (int ns = 0; ns <= 6; ns++) {
+                const float thr = 0.01f;
+                for (int i = 0; i < 8 * nvec; i++) cw[i] = (frand() + 1.0f) * 0.5f;
+                cw[0] = NAN;
+                if (nvec > 1) cw[9] = -0.0f;
+                cw[8 * nvec - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
+                for (int r = 0; r < rows; r++) rw[r] = (frand() + 1.0f) * 0.5f;
+                if (rows > 1) rw[1] = 1.0f;
+                if (rows > 2) rw[2] = nextafterf(1.0f, 2.0f);
+                for (int i = 0; i < NB; i++) ref[i] = out[i] = frand();
+                float *dr[8], *dout[8];
+                for (int sh = 0; sh < ns; sh++) {
+                    const int o = 3 + sh * (DS * 10 + 5) + (sh & 1) * 7; /* unaligned, distinct */
+                    dr[sh] = ref + o;
+                    dout[sh] = out + o;
+                    w[sh] = sh == 0 ? 0.0f : frand();
+                }
+                vs_splat_voxel1_scalar(dr, w, ns, DS, cw, rw, rows, nvec, thr);
+                fn(dout, w, ns, DS, cw, rw, rows, nvec, thr);
+                cases++;
+                if (memcmp(ref, out, sizeof ref)) {
+                    bad++;
+                    if (isa) CHECK(0, "splat_voxel1 %s: %d vectors, %d rows, %d sheets differ", isa, nvec, rows, ns);
+                }
+            }
+    if (isa) printf("splat_voxel1  %s  bit-identical to scalar in %d cases\n", isa, cases);
+    return bad;
+}
+
+/* a deliberately wrong voxel splat: keeps products equal to the threshold */
+static void voxel1_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                       int rows, int nvec, float thr)
+{
+    for (int r = 0; r < rows; r++)
+        for (int s = 0; s < ns; s++)
+            for (int i = 0; i < 8 * nvec; i++) {
+                const float v = cw[i] * rw[r];
+                dst[s][r * ds + i] += w[s] * (v >= thr ? v : 0.0f);
+            }
+}
+
 static void check_dispatch(void)
 {
     vs_isa best = vs_isa_detect();
@@ -481,6 +535,7 @@ int main(void)
     CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     CHECK(check_block_mix(NULL, block_mix_off), "check_block_mix cannot tell a wrong kernel from the reference");
     CHECK(check_project(NULL, project_off), "check_project cannot tell a wrong kernel from the reference");
+    CHECK(check_voxel1(NULL, voxel1_off), "check_voxel1 cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
@@ -499,6 +554,7 @@ int main(void)
         check_shade("avx2", vs_shade_lut_avx2, &fx);
         check_composite("avx2", vs_composite_avx2);
         check_project("avx2", vs_project_brick_avx2);
+        check_voxel1("avx2", vs_splat_voxel1_avx2);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
@@ -506,6 +562,7 @@ int main(void)
         check_row4("avx512", vs_splat_row4_avx512, 0, NULL);
         check_block("avx512", vs_splat_block_avx512);
         check_project("avx512", vs_project_brick_avx512);
+        check_voxel1("avx512", vs_splat_voxel1_avx512);
     } else {
         printf("SKIP: avx512 kernels: this CPU has no AVX-512\n");
     }

@@ -1,0 +1,36 @@
+/* One density voxel into all its sheets, AVX2: each 8-pixel vector of a
+ * footprint row is built once in a register (column weights times the row
+ * weight, zeroed outside the radius) and added to every sheet; multiply then
+ * add as the scalar reference (src/kernels.c; no FMA, src/kernels.h). */
+#include "kernels.h"
+
+#include <immintrin.h>
+
+void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                          int rows, int nvec, float thr)
+{
+    const __m256 t = _mm256_set1_ps(thr);
+    if (nvec == 1) { /* the common case: an 8-pixel footprint */
+        const __m256 c = _mm256_loadu_ps(cw);
+        for (int r = 0; r < rows; r++) {
+            __m256 h = _mm256_mul_ps(c, _mm256_set1_ps(rw[r]));
+            h = _mm256_and_ps(h, _mm256_cmp_ps(h, t, _CMP_GT_OQ));
+            for (int s = 0; s < ns; s++) {
+                float *d = dst[s] + r * ds;
+                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(_mm256_set1_ps(w[s]), h)));
+            }
+        }
+        return;
+    }
+    for (int r = 0; r < rows; r++) {
+        const __m256 ry = _mm256_set1_ps(rw[r]);
+        for (int v = 0; v < nvec; v++) {
+            __m256 h = _mm256_mul_ps(_mm256_loadu_ps(cw + 8 * v), ry);
+            h = _mm256_and_ps(h, _mm256_cmp_ps(h, t, _CMP_GT_OQ));
+            for (int s = 0; s < ns; s++) {
+                float *d = dst[s] + r * ds + 8 * v;
+                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(_mm256_set1_ps(w[s]), h)));
+            }
+        }
+    }
+}
