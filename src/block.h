@@ -75,7 +75,7 @@ void vs_block_free(vs_block_geom *g);
 static inline void vs_block_place_at(const vs_block_geom *g, float cx, float cy, vs_block_place *p)
 {
     float lx = cx - g->rx0, ly = cy - g->ry0;
-    float ax = ceilf(lx), ay = ceilf(ly);
+    float ax = (float)vs_iceil(lx), ay = (float)vs_iceil(ly);
     p->x = (int)ax;
     p->y = (int)ay;
     p->ux = ax - lx;

@@ -14,6 +14,20 @@
 
 #include "internal.h"
 
+/* floor and ceil of a float known to lie well inside int's range (pixel and
+ * sheet coordinates): exact, and a few instructions where the baseline
+ * x86-64 floorf/ceilf are long sequences (SSE4.1's roundss is not baseline). */
+static inline int vs_ifloor(float v)
+{
+    const int i = (int)v;
+    return i - (v < (float)i);
+}
+static inline int vs_iceil(float v)
+{
+    const int i = (int)v;
+    return i + (v > (float)i);
+}
+
 typedef struct vs_footprint {
     double a;            /* 2 ln 2                                            */
     double b;            /* kernel normalisation for radius R                  */

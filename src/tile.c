@@ -377,8 +377,8 @@ static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, f
 {
     const vs_frame *F = t->F;
     const float px = (float)F->pad_x * sc, py = (float)F->pad_y * sc;
-    int xa = (int)floorf(x0 - px) - t->x0, xb = (int)ceilf(x1 + px) - t->x0;
-    int ya = (int)floorf(y0 - py) - t->y0, yb = (int)ceilf(y1 + py) - t->y0;
+    int xa = vs_ifloor(x0 - px) - t->x0, xb = vs_iceil(x1 + px) - t->x0;
+    int ya = vs_ifloor(y0 - py) - t->y0, yb = vs_iceil(y1 + py) - t->y0;
     if (xa < 0) xa = 0;
     if (ya < 0) ya = 0;
     if (xb > t->tw - 1) xb = t->tw - 1;
@@ -464,7 +464,7 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
             if (box[1] + px * sc < bx0 || box[0] - px * sc > bx1 || box[3] + py * sc < by0 || box[2] - py * sc > by1)
                 continue; /* not this tile */
         }
-        int kf = (int)floorf((z - rz) / slab), kl = (int)floorf((z + rz) / slab);
+        int kf = vs_ifloor((z - rz) / slab), kl = vs_ifloor((z + rz) / slab);
         if (kf < opening) kf = opening; /* rounding guard: the brick bound is conservative */
         if (kl > ts->kmax) kl = ts->kmax;
         if (kl < kf) continue;
