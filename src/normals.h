@@ -7,6 +7,21 @@
 #include "internal.h"
 
 #include <float.h>
+#if defined(__x86_64__) || defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
+/* lrintf for |v| <= 127 (never NaN): round to nearest, ties to even, in
+ * the current rounding mode.  With errno-setting maths lrintf is a library
+ * call; on x86 this is one cvtss2si, the same result. */
+static inline int vs_round_byte(float v)
+{
+#if defined(__x86_64__) || defined(__SSE__)
+    return _mm_cvtss_si32(_mm_set_ss(v));
+#else
+    return (int)lrintf(v);
+#endif
+}
 
 typedef struct vs_shade_lut {
     int nl, np;              /* longitude bins (lambda), latitude bins (phi) */
@@ -36,9 +51,9 @@ static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy
     int ix = 0, iy = 0, iz = 0;
     if (m > 0.0f) { /* quantise to signed bytes by the largest component */
         float k = 127.0f / m;
-        ix = (int)lrintf(gx * k);
-        iy = (int)lrintf(gy * k);
-        iz = (int)lrintf(gz * k);
+        ix = vs_round_byte(gx * k);
+        iy = vs_round_byte(gy * k);
+        iz = vs_round_byte(gz * k);
     }
     if (ix == 0 && iy == 0 && iz == 0) iz = -127; /* zero gradient: faces the eye */
     int li = lut->lambda_bin[(iy + 127) * 255 + (ix + 127)];
