@@ -17,7 +17,7 @@ typedef struct kernel_entry {
     vs_isa isa;
     int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
                  8 gradient-splat block (mixing), 9 project_brick (8n voxels),
-                 10 splat_voxel1 (8 rows of 8/64 floats into 4 sheets) */
+                 10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets) */
     void *fn;
 } kernel_entry;
 
@@ -126,6 +126,12 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 const float w4s[4] = {0.25f, 0.5f, 0.75f, 1.0f};
                 ((vs_splat_voxel1_fn)k->fn)(d4, w4s, 4, BLOCK_DS, ex, ex + 64, BLOCK_ROWS, block_nvec(n), 1e-6f);
             } break;
+            case 11: {
+                float *d4[4] = {buf + off, buf + off + SHEET_STEP, buf + off + 2 * SHEET_STEP, buf + off + 3 * SHEET_STEP};
+                const float w16[16] = {0.25f, 0.5f, 0.75f, 1.0f, 0.2f, 0.4f, 0.6f, 0.8f,
+                                       0.1f,  0.3f, 0.5f,  0.7f, 0.9f, 0.8f, 0.7f, 0.6f};
+                ((vs_splat_voxel1_fn)k->fn)(d4, w16, 4, BLOCK_DS, ex, ex + 64, BLOCK_ROWS, block_nvec(n), 1e-6f);
+            } break;
             case 9: {
                 volatile int kept = ((vs_project_brick_fn)k->fn)(B->vox, 8 * n, &B->P, B->keep, B->xyz);
                 (void)kept;
@@ -143,7 +149,8 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS : n;
+    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 || k->kind == 11 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS
+                                                                               : n;
     return best * 1e6 / ((double)reps * elems);
 }
 
@@ -199,6 +206,8 @@ int bench_kernels(const bench_opts *o)
         {"splat_voxel1", VS_ISA_SCALAR, 10, (void *)vs_splat_voxel1_scalar},
         {"splat_voxel1", VS_ISA_AVX2, 10, (void *)vs_splat_voxel1_avx2},
         {"splat_voxel1", VS_ISA_AVX512, 10, (void *)vs_splat_voxel1_avx512},
+        {"splat_voxel4", VS_ISA_SCALAR, 11, (void *)vs_splat_voxel4_scalar},
+        {"splat_voxel4", VS_ISA_AVX2, 11, (void *)vs_splat_voxel4_avx2},
         {"project_brick", VS_ISA_SCALAR, 9, (void *)vs_project_brick_scalar},
         {"project_brick", VS_ISA_AVX2, 9, (void *)vs_project_brick_avx2},
         {"project_brick", VS_ISA_AVX512, 9, (void *)vs_project_brick_avx512},

@@ -34,6 +34,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->shade_lut = vs_shade_lut_scalar;
     k->project_brick = vs_project_brick_scalar;
     k->splat_voxel1 = vs_splat_voxel1_scalar;
+    k->splat_voxel4 = vs_splat_voxel4_scalar;
 #if defined(__x86_64__) || defined(__i386__)
     if (cap >= VS_ISA_SSE4) {
         k->isa = VS_ISA_SSE4;
@@ -54,6 +55,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->composite = vs_composite_avx2;
         k->project_brick = vs_project_brick_avx2;
         k->splat_voxel1 = vs_splat_voxel1_avx2;
+        k->splat_voxel4 = vs_splat_voxel4_avx2; /* also for avx512 */
     }
     if (cap >= VS_ISA_AVX512) {
         k->isa = VS_ISA_AVX512;

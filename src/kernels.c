@@ -190,3 +190,22 @@ void vs_splat_voxel1_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
         }
     }
 }
+
+void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            int rows, int nvec, float thr)
+{
+    float h[VS_VOXEL1_MAX];
+    const int n = 2 * nvec;
+    for (int r = 0; r < rows; r++) {
+        for (int p = 0; p < n; p++) {
+            const float v = cw[p] * rw[r];
+            h[p] = v > thr ? v : 0.0f;
+        }
+        for (int s = 0; s < ns; s++) {
+            float *d = dst[s] + r * ds;
+            const float *ws = w + 4 * s;
+            for (int p = 0; p < n; p++)
+                for (int c = 0; c < 4; c++) d[4 * p + c] += ws[c] * h[p];
+        }
+    }
+}

@@ -48,6 +48,8 @@ typedef struct vs_project_in {
 /* Widest row splat_voxel1 takes (floats); wider footprints use blocks in
  * memory (splat_block). */
 #define VS_VOXEL1_MAX 64
+/* Most sheets one voxel kernel may reach (the splat_voxel kernels). */
+#define VS_MAX_SHEETS_VOXEL 64
 /* Most voxels one brick holds (VS_BRICK^3, src/relevant.h). */
 #define VS_PROJECT_MAX 512
 
@@ -103,6 +105,13 @@ typedef struct vs_kernels {
      *   dst[s][r ds + i] += w[s] h[i],  s < ns, r < rows */
     void (*splat_voxel1)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                          int rows, int nvec, float thr);
+    /* the same for four channels (pre, post-alpha: the block holds h in
+     * each channel of a pixel): pixel p of row r has h = cw[p] rw[r] (0
+     * where not > thr), p < 2 nvec, and
+     *   dst[s][r ds + 4p + c] += w[4s + c] h,  c < 4, s < ns, r < rows
+     * cw must be readable (any values) up to a multiple of 8 floats */
+    void (*splat_voxel4)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                         int rows, int nvec, float thr);
 } vs_kernels;
 
 /* Scalar reference kernels (src/kernels.c). */
@@ -131,6 +140,10 @@ void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t d
                           int rows, int nvec, float thr);
 void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                             int rows, int nvec, float thr);
+void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            int rows, int nvec, float thr);
+void vs_splat_voxel4_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                          int rows, int nvec, float thr);
 typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);

@@ -403,6 +403,7 @@ static void voxel_box(const vs_frame *F, float x, float y, float z, float box[4]
     *sc = (float)vs_camera_scale(&F->cam, zn);
 }
 
+_Static_assert(VS_MAX_VSPAN <= VS_MAX_SHEETS_VOXEL, "the splat_voxel kernels take every sheet a kernel reaches");
 _Static_assert(VS_BRICK == 8 && VS_PROJECT_MAX >= VS_BRICK * VS_BRICK * VS_BRICK,
                "project_brick (src/kernels.h) decodes 3-bit brick offsets of at most 512 voxels");
 
@@ -622,6 +623,25 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             ts->ws->splatted += (uint64_t)ns;
             vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
             F->kern.splat_voxel1(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+            continue;
+        }
+        if ((pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA) && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
+            /* colour and opacity (or density): the same, four channels */
+            float cw[VS_VOXEL1_MAX + 8] = {0}, rw[VS_BLOCK_MAX_SPAN], w[4 * VS_MAX_VSPAN];
+            float *dst[VS_MAX_VSPAN];
+            int ns = 0;
+            for (int k = opening; k <= e->kl; k++) {
+                const float Dk = D[k - opening];
+                if (!(Dk > 0.0f)) continue;
+                const int slot = (k - kbase) % R;
+                dst[ns] = ring[slot] + off;
+                for (int c = 0; c < 4; c++) w[4 * ns + c] = wv[c] * Dk;
+                ns++;
+                merge_box(&bbs[slot], &box);
+            }
+            ts->ws->splatted += (uint64_t)ns;
+            vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
+            F->kern.splat_voxel4(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
             continue;
         }
         vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);

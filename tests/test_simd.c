@@ -447,25 +447,28 @@ static int project_off(const uint16_t *vox, int n, const vs_project_in *P, uint1
     return q;
 }
 
-/* splat_voxel1: 0..9 rows, 1..8 vectors (odd counts: the AVX-512 tail),
- * 0..6 sheets at distinct unaligned places in one buffer, row weights across the
- * threshold (products exactly at, just above and below it), NaN and -0 column
- * weights; every float of the buffer, guards included, must equal the
- * reference's.  Returns the number of mismatching cases. */
-static int check_voxel1(const char *isa, vs_splat_voxel1_fn fn)
+/* splat_voxel1 (ch 1) and splat_voxel4 (ch 4): 0..9 rows, 1..8 vectors
+ * (odd counts: the AVX-512 tail; for ch 4 fewer than four vectors of a
+ * group), 0..6 sheets at distinct unaligned places in one buffer, row
+ * weights across the threshold (products exactly at, just above and below
+ * it), NaN and -0 column weights, per-channel sheet weights with a zero;
+ * every float of the buffer, guards included, must equal the reference's.
+ * Returns the number of mismatching cases. */
+static int check_voxel(const char *isa, int ch, vs_splat_voxel1_fn ref_fn, vs_splat_voxel1_fn fn)
 {
     enum { DS = 150, ROWS = 9, NB = 7 * DS * 10 + 200 };
     static float ref[NB], out[NB];
-    float cw[VS_VOXEL1_MAX], rw[ROWS], w[8];
+    float cw[VS_VOXEL1_MAX + 8], rw[ROWS], w[4 * 8];
     int bad = 0, cases = 0;
     for (int nvec = 1; nvec <= VS_VOXEL1_MAX / 8; nvec++)
         for (int rows = 0; rows <= ROWS; rows++)
             for (int ns = 0; ns <= 6; ns++) {
                 const float thr = 0.01f;
-                for (int i = 0; i < 8 * nvec; i++) cw[i] = (frand() + 1.0f) * 0.5f;
+                const int npx = 8 * nvec / ch; /* pixels a row */
+                for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) cw[i] = (frand() + 1.0f) * 0.5f;
                 cw[0] = NAN;
-                if (nvec > 1) cw[9] = -0.0f;
-                cw[8 * nvec - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
+                if (npx > 2) cw[2] = -0.0f;
+                cw[npx - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
                 for (int r = 0; r < rows; r++) rw[r] = (frand() + 1.0f) * 0.5f;
                 if (rows > 1) rw[1] = 1.0f;
                 if (rows > 2) rw[2] = nextafterf(1.0f, 2.0f);
@@ -475,17 +478,20 @@ static int check_voxel1(const char *isa, vs_splat_voxel1_fn fn)
                     const int o = 3 + sh * (DS * 10 + 5) + (sh & 1) * 7; /* unaligned, distinct */
                     dr[sh] = ref + o;
                     dout[sh] = out + o;
-                    w[sh] = sh == 0 ? 0.0f : frand();
+                    for (int c = 0; c < 4; c++) w[4 * sh + c] = c == 1 ? 0.0f : frand();
                 }
-                vs_splat_voxel1_scalar(dr, w, ns, DS, cw, rw, rows, nvec, thr);
+                if (ch == 1)
+                    for (int sh = 0; sh < ns; sh++) w[sh] = w[4 * sh];
+                ref_fn(dr, w, ns, DS, cw, rw, rows, nvec, thr);
                 fn(dout, w, ns, DS, cw, rw, rows, nvec, thr);
                 cases++;
                 if (memcmp(ref, out, sizeof ref)) {
                     bad++;
-                    if (isa) CHECK(0, "splat_voxel1 %s: %d vectors, %d rows, %d sheets differ", isa, nvec, rows, ns);
+                    if (isa)
+                        CHECK(0, "splat_voxel%d %s: %d vectors, %d rows, %d sheets differ", ch, isa, nvec, rows, ns);
                 }
             }
-    if (isa) printf("splat_voxel1  %s  bit-identical to scalar in %d cases\n", isa, cases);
+    if (isa) printf("splat_voxel%d  %s  bit-identical to scalar in %d cases\n", ch, isa, cases);
     return bad;
 }
 
@@ -498,6 +504,19 @@ static void voxel1_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, 
             for (int i = 0; i < 8 * nvec; i++) {
                 const float v = cw[i] * rw[r];
                 dst[s][r * ds + i] += w[s] * (v >= thr ? v : 0.0f);
+            }
+}
+
+/* a deliberately wrong four-channel splat: channel 3 takes channel 2's weight */
+static void voxel4_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                       int rows, int nvec, float thr)
+{
+    for (int r = 0; r < rows; r++)
+        for (int s = 0; s < ns; s++)
+            for (int p = 0; p < 2 * nvec; p++) {
+                const float v = cw[p] * rw[r];
+                const float h = v > thr ? v : 0.0f;
+                for (int c = 0; c < 4; c++) dst[s][r * ds + 4 * p + c] += w[4 * s + (c == 3 ? 2 : c)] * h;
             }
 }
 
@@ -535,7 +554,10 @@ int main(void)
     CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     CHECK(check_block_mix(NULL, block_mix_off), "check_block_mix cannot tell a wrong kernel from the reference");
     CHECK(check_project(NULL, project_off), "check_project cannot tell a wrong kernel from the reference");
-    CHECK(check_voxel1(NULL, voxel1_off), "check_voxel1 cannot tell a wrong kernel from the reference");
+    CHECK(check_voxel(NULL, 1, vs_splat_voxel1_scalar, voxel1_off),
+          "check_voxel cannot tell a wrong kernel from the reference");
+    CHECK(check_voxel(NULL, 4, vs_splat_voxel4_scalar, voxel4_off),
+          "check_voxel (4 channels) cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
@@ -554,7 +576,8 @@ int main(void)
         check_shade("avx2", vs_shade_lut_avx2, &fx);
         check_composite("avx2", vs_composite_avx2);
         check_project("avx2", vs_project_brick_avx2);
-        check_voxel1("avx2", vs_splat_voxel1_avx2);
+        check_voxel("avx2", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx2);
+        check_voxel("avx2", 4, vs_splat_voxel4_scalar, vs_splat_voxel4_avx2);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
@@ -562,7 +585,7 @@ int main(void)
         check_row4("avx512", vs_splat_row4_avx512, 0, NULL);
         check_block("avx512", vs_splat_block_avx512);
         check_project("avx512", vs_project_brick_avx512);
-        check_voxel1("avx512", vs_splat_voxel1_avx512);
+        check_voxel("avx512", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx512);
     } else {
         printf("SKIP: avx512 kernels: this CPU has no AVX-512\n");
     }
