@@ -5,6 +5,9 @@
  * Pattern: opaque handles with create/release, a settings struct filled with
  * defaults by vs_settings_init(), every call returns a vs_status, and the
  * context keeps a human-readable last-error message.  The library never prints.
+ * A context keeps caches between calls (worker pool, relevant voxels, shading
+ * tables), so it serves one call at a time: use one context per thread that
+ * renders.
  */
 #ifndef VSPLAT_H
 #define VSPLAT_H

@@ -1,5 +1,6 @@
 /* Context lifetime, error reporting, settings defaults and names. */
 #include "internal.h"
+#include "normals.h"
 #include "pool.h"
 #include "relevant.h"
 
@@ -24,6 +25,8 @@ void vs_context_release(vs_context *ctx)
     if (!ctx) return;
     vs_pool_destroy(ctx->pool);
     vs_relevant_cache_free(ctx->relevant);
+    if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
+    free(ctx->shade_lut);
     if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */
     free(ctx);
 }

@@ -63,6 +63,7 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
 /* ---- context ---- */
 struct vs_pool;
 struct vs_relevant_cache;
+struct vs_shade_lut;
 struct vs_context {
     char error[512];
     struct vs_pool *pool;       /* created lazily, reused across frames        */
@@ -73,6 +74,9 @@ struct vs_context {
                                            this serial (0: none): a full pass
                                            over the volume, once, not per frame */
     double otsu_iso;
+    struct vs_shade_lut *shade_lut;     /* normal and shading tables, rebuilt
+                                           only when their size or the light
+                                           changes (a headlight never does) */
     const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */
     void *oiio_handle;                  /* its dlopen handle                     */
 };

@@ -30,8 +30,12 @@ typedef struct vs_shade_lut {
     uint16_t *phi_bin;       /* [255*181]: (gz+127, r) -> phi bin             */
     float *diffuse;          /* [np*nl]                                        */
     float *specular;         /* [np*nl]                                        */
+    vs_light light;          /* what diffuse and specular were built for       */
 } vs_shade_lut;
 
+/* Builds the tables into `lut`, which is zeroed or holds earlier tables:
+ * those are kept when nl is the same, and the shading table too when the
+ * light is (a context keeps one lut across frames, see vs_context). */
 vs_status vs_shade_lut_setup(vs_context *ctx, int nl, const vs_light *light, vs_shade_lut *lut);
 void vs_shade_lut_free(vs_shade_lut *lut);
 

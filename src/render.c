@@ -204,7 +204,6 @@ static void free_frame(vs_frame *F)
     vs_block_free(&F->skew);
     for (int i = 0; i < F->nsheet_skew; i++) vs_block_free(&F->sheet_skew[i]);
     free(F->sheet_skew);
-    vs_shade_lut_free(&F->lut);
     free(F->cls);
     free(F->bview);
     free(F->tile_start);
@@ -268,8 +267,16 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
             F.skew_maxrows = F.skew.ny;
         }
     }
-    if (!s->exact_normals && (rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, &F.lut)) != VS_OK)
-        goto fail;
+    if (!s->exact_normals) {
+        /* the context's tables (kept across frames); the frame reads a copy
+         * of their pointers */
+        if (!ctx->shade_lut && !(ctx->shade_lut = calloc(1, sizeof *ctx->shade_lut))) {
+            rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "shading tables: out of memory");
+            goto fail;
+        }
+        if ((rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, ctx->shade_lut)) != VS_OK) goto fail;
+        F.lut = *ctx->shade_lut;
+    }
     for (int i = 0; i < VS_TF_TABLE; i++)
         F.alpha_corr[i] = (float)vs_opacity_correct(F.cls->alpha[i], s->slab);
     for (int i = 0; i <= 1024; i++) F.opacity_corr[i] = (float)vs_opacity_correct(i / 1024.0, s->slab);

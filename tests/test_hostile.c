@@ -600,7 +600,7 @@ static void test_shade_lut_nonfinite(void)
     vs_camera_setup(ctx, v, &s, &cam);
     vs_light l;
     vs_light_setup(&s, &cam, &l);
-    vs_shade_lut lut;
+    vs_shade_lut lut = {0}; /* zeroed: vs_shade_lut_setup keeps tables it finds */
     if (vs_shade_lut_setup(ctx, 256, &l, &lut) != VS_OK) {
         CHECK(0, "lut: %s", vs_last_error(ctx));
         vs_volume_release(v);

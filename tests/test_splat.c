@@ -315,6 +315,52 @@ static void test_invariance(void)
     vs_volume_release(v);
 }
 
+/* The context keeps its shading tables across frames and rebuilds them when
+ * the light or the table size changes: a context that rendered other lights
+ * and sizes first must give the same image as a fresh one. */
+static void test_shading_table_cache(void)
+{
+    vs_volume *v;
+    if (vs_volume_scene(ctx, "sphere", &v) != VS_OK) {
+        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
+        return;
+    }
+    vs_settings s[4];
+    for (int i = 0; i < 4; i++) {
+        vs_settings_init(&s[i]);
+        s[i].width = s[i].height = 64;
+        s[i].threads = 1;
+    }
+    s[1].headlight = 0; /* a light from the upper left */
+    s[1].light_dir[0] = -1.0;
+    s[1].light_dir[1] = 0.5;
+    s[1].light_dir[2] = 1.0;
+    s[2].normal_lut_size = 64;
+    s[3] = s[1];
+    s[3].azimuth = 70.0; /* a fixed light seen from another view */
+    vs_image fresh[4];
+    for (int i = 0; i < 4; i++) {
+        vs_context *c;
+        fresh[i].rgba = NULL;
+        if (vs_context_create(&c) != VS_OK) continue;
+        if (vs_render(c, v, &s[i], &fresh[i], NULL) != VS_OK) CHECK(0, "render: %s", vs_last_error(c));
+        vs_context_release(c);
+    }
+    CHECK(fresh[0].rgba && fresh[1].rgba && max_diff(&fresh[0], &fresh[1]) > 0.05,
+          "the light changes the image (else this test shows nothing)");
+    const int order[] = {0, 1, 2, 0, 3, 1, 2, 3, 0};
+    for (size_t n = 0; n < sizeof order / sizeof *order; n++) {
+        const int i = order[n];
+        vs_image img;
+        if (!fresh[i].rgba || !render(v, &s[i], &img, NULL)) continue;
+        CHECK(max_diff(&img, &fresh[i]) == 0.0, "settings %d after %d: a reused context differs by %g", i,
+              n ? order[n - 1] : -1, max_diff(&img, &fresh[i]));
+        vs_image_free(&img);
+    }
+    for (int i = 0; i < 4; i++) vs_image_free(&fresh[i]);
+    vs_volume_release(v);
+}
+
 /* Post-shaded splatting against the analytic ray caster on the sphere. */
 static double psnr_rgb(const vs_image *a, const vs_image *b)
 {
@@ -565,6 +611,7 @@ int main(void)
     test_ramp_gradient();
     test_cube_edges();
     test_invariance();
+    test_shading_table_cache();
     test_skewed_blocks();
     test_skewed_tables();
     /* the sphere against its analytic definition */
