@@ -72,6 +72,19 @@ else
     done
 fi
 
+# --stats -: the same JSON on stdout, no file named "-"
+expect_ok "render --stats -" render "${SCENE[@]}" -q --stats - -o c.png
+if [[ ! -e - ]]; then ok; else bad "--stats - wrote a file named '-'"; fi
+if command -v python3 >/dev/null; then
+    if python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); assert d["width"] == 64, d' "$T/out"; then
+        ok
+    else
+        bad "--stats - did not print the JSON on stdout: $(cat "$T/out")"
+    fi
+else
+    expect_out '"ms_stage"' "--stats - prints the JSON"
+fi
+
 # -q and --print-stats
 expect_ok "render -q --print-stats" render "${SCENE[@]}" -q --print-stats -o b.png
 if [[ ! -s $T/err ]]; then ok; else bad "-q still printed: $(cat "$T/err")"; fi

@@ -549,7 +549,7 @@ void cli_render_usage(FILE *f)
             "output:\n"
             "  -o OUT                 image; format from the extension: .png, .exr, .tif, .tiff, .gif\n"
             "  --bits 8|16            PNG bit depth (default 8)\n"
-            "  --stats FILE.json      per-stage timings and counts as JSON\n"
+            "  --stats FILE.json      per-stage timings and counts as JSON (- : on stdout)\n"
             "  --print-stats          per-stage timing table on stdout\n"
             "  -q                     quiet: no summary line and no notes\n"
             "pipeline and classification:\n"

@@ -7,7 +7,8 @@
 # is a finding too) and prints its execution count.  A crash leaves its input
 # in build-fuzz/crashes/<target>/ and is copied to
 # tests/fuzz/regressions/<target>/, which tests/test_fuzz_regressions.c loads
-# in the normal test suite (commit it with the fix).
+# in the normal test suite (commit it with the fix).  VSPLAT_FUZZ_SEED fixes
+# libFuzzer's seed (CI does, so that a run can be repeated; unset: random).
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -45,7 +46,7 @@ for t in "${targets[@]}"; do
     log="$B/fuzz_$t.log"
     echo "== fuzz_$t: $SECS s" >&2
     set +e
-    (cd "$B" && "$B/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 \
+    (cd "$B" && "$B/tests/fuzz/fuzz_$t" "$corpus" ${VSPLAT_FUZZ_SEED:+-seed="$VSPLAT_FUZZ_SEED"} -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 \
         -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$crashes/" >"$log" 2>&1)
     rc=$?
     set -e

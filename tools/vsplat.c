@@ -115,6 +115,22 @@ static int write_stats_tmp(const vs_stats *st, const char *path, char *tmp, size
     return 0;
 }
 
+/* --stats -: the JSON on stdout. */
+static int print_stats_json(const vs_stats *st)
+{
+    size_t need = vs_stats_to_json(st, NULL, 0);
+    char *buf = malloc(need + 1);
+    if (!buf) {
+        fprintf(stderr, "vsplat: stats: out of memory\n");
+        return EXIT_INTERNAL;
+    }
+    vs_stats_to_json(st, buf, need + 1);
+    int ok = fwrite(buf, 1, need, stdout) == need && fflush(stdout) == 0;
+    free(buf);
+    if (!ok) fprintf(stderr, "vsplat: stats: cannot write to standard output: %s\n", strerror(errno));
+    return ok ? 0 : EXIT_INTERNAL;
+}
+
 static void print_stats_table(const vs_stats *st)
 {
     const vs_stage_times *t = &st->ms_stage;
@@ -213,8 +229,10 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
     }
     if (sequence && rc) remove_frames(o, written);
 
+    /* --stats -: the JSON goes to stdout once everything is written */
+    const int stats_file = o->stats_path && strcmp(o->stats_path, "-") != 0;
     char stats_tmp[4200] = "";
-    if (!rc && o->stats_path) {
+    if (!rc && stats_file) {
         rc = write_stats_tmp(&stats, o->stats_path, stats_tmp, sizeof stats_tmp);
         if (rc && sequence) remove_frames(o, written);
     }
@@ -223,14 +241,14 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
                               : vs_image_write(ctx, o->output, &frames[0], o->bits);
         if (st != VS_OK) {
             rc = report(ctx, st, o->output);
-            if (o->stats_path) remove(stats_tmp);
+            if (stats_file) remove(stats_tmp);
         }
     }
     if (frames)
         for (int f = 0; f < (is_gif ? nframes : 1); f++) vs_image_free(&frames[f]);
     free(frames);
     if (rc) return rc;
-    if (o->stats_path && rename(stats_tmp, o->stats_path) != 0) {
+    if (stats_file && rename(stats_tmp, o->stats_path) != 0) {
         fprintf(stderr, "vsplat: %s: cannot write: %s\n", o->stats_path, strerror(errno));
         remove(stats_tmp);
         if (sequence) remove_frames(o, nframes);
@@ -238,6 +256,7 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
         return EXIT_USAGE;
     }
 
+    if (o->stats_path && !stats_file && print_stats_json(&stats) != 0) return EXIT_INTERNAL;
     if (o->print_stats) print_stats_table(&stats);
     if (!o->quiet) {
         const char *pipe = stats.pipeline ? stats.pipeline : vs_pipeline_name(o->s.pipeline);
