@@ -585,6 +585,10 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     const int ch = g->ch, ppv = 8 / ch, bs = 8 * g->nvec;
     const vs_pipeline pl = F->pipeline;
     const float A = F->fp.A, rk = F->fp.row_k;
+    /* ring slots of the sheets from `opening` on: every voxel of this
+     * bucket starts there (one division per sheet, not per section) */
+    int slots[VS_MAX_VSPAN];
+    for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) slots[j] = (opening + j - kbase) % R;
     for (int i = ts->head[opening - ts->kmin]; i >= 0; i = ts->p[i].next) {
         const pend *e = &ts->p[i];
         if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y, 1.0f)) {
@@ -615,7 +619,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             int ns = 0;
             for (int k = opening; k <= e->kl; k++) {
                 if (!(D[k - opening] > 0.0f)) continue;
-                const int slot = (k - kbase) % R;
+                const int slot = slots[k - opening];
                 dst[ns] = ring[slot] + off;
                 w[ns++] = wv[0] * D[k - opening];
                 merge_box(&bbs[slot], &box);
@@ -633,7 +637,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             for (int k = opening; k <= e->kl; k++) {
                 const float Dk = D[k - opening];
                 if (!(Dk > 0.0f)) continue;
-                const int slot = (k - kbase) % R;
+                const int slot = slots[k - opening];
                 dst[ns] = ring[slot] + off;
                 for (int c = 0; c < 4; c++) w[4 * ns + c] = wv[c] * Dk;
                 ns++;
@@ -651,7 +655,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                                  1.0f, 1.0f, NULL};
             if (!(sec.D > 0.0f)) continue;
             ts->ws->splatted++;
-            int slot = (k - kbase) % R;
+            const int slot = slots[k - opening];
             float w8[8];
             if (pl == VS_PIPELINE_POST_CD) {
                 float w = wv[0] * sec.D;
