@@ -589,8 +589,13 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
      * bucket starts there (one division per sheet, not per section) */
     int slots[VS_MAX_VSPAN];
     for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) slots[j] = (opening + j - kbase) % R;
+    const char *vdata = F->vol->data;
+    const size_t vsize = vs_type_size(F->vol->type);
     for (int i = ts->head[opening - ts->kmin]; i >= 0; i = ts->p[i].next) {
         const pend *e = &ts->p[i];
+        /* the next voxel's value is a cache miss in the volume: ask for it
+         * while this one is splatted */
+        if (e->next >= 0) __builtin_prefetch(vdata + (size_t)ts->p[e->next].v * vsize);
         if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y, 1.0f)) {
             ts->ws->culled++;
             continue;
