@@ -309,20 +309,26 @@ typedef struct pend {
     float x, y, z; /* view-space centre (perspective: x, y at depth 0) */
     uint32_t v;    /* linear index in the volume                    */
     int kl;        /* last sheet (lowered when the voxel is culled) */
-    int next;      /* next entry with the same first sheet          */
     float w[4];    /* splat weights before the slab's depth integral */
 } pend;
 
-/* Per tile: the voxels of expanded bricks in buckets by first sheet.  A
- * sheet receives its voxels in (first sheet, brick, voxel) order whatever
- * the tiling or thread count, so the sums are bit-identical. */
+/* The voxels whose first sheet is one sheet, in the order they came. */
+typedef struct pend_bucket {
+    pend *p;
+    int n, cap;
+} pend_bucket;
+
+/* Per tile: the voxels of expanded bricks in buckets by first sheet, each
+ * bucket one array (read in order when its sheet opens).  A sheet receives
+ * its voxels in (first sheet, brick, voxel) order whatever the tiling or
+ * thread count, so the sums are bit-identical. */
 typedef struct tile_state {
     const tile_ctx *t;
-    pend *p;
-    int np, cap;
-    int *head, *tail; /* bucket of sheet k at k - kmin; -1 when empty */
+    pend_bucket *bk;  /* bucket of sheet k at k - kmin                   */
+    pend *spare;      /* an emptied bucket's array, for the next new one  */
+    int spare_cap;
     int kmin, kmax;
-    int *active;      /* sheet-at-a-time path: voxels overlapping the sheet */
+    pend **active;    /* sheet-at-a-time path: voxels overlapping the sheet */
     int nactive, cap_active;
     const float *acc; /* the tile's accumulation (occlusion map = alpha)   */
     const int *sat;   /* summed-area table of opaque pixels                */
@@ -407,6 +413,38 @@ _Static_assert(VS_MAX_VSPAN <= VS_MAX_SHEETS_VOXEL, "the splat_voxel kernels tak
 _Static_assert(VS_BRICK == 8 && VS_PROJECT_MAX >= VS_BRICK * VS_BRICK * VS_BRICK,
                "project_brick (src/kernels.h) decodes 3-bit brick offsets of at most 512 voxels");
 
+/* Room for one more voxel in a bucket (a new bucket takes the spare array
+ * of an emptied one); 0 when out of memory. */
+static int grow_bucket(tile_state *ts, pend_bucket *bk)
+{
+    if (!bk->p && ts->spare) {
+        bk->p = ts->spare;
+        bk->cap = ts->spare_cap;
+        ts->spare = NULL;
+        return 1;
+    }
+    const int cap = bk->cap ? 2 * bk->cap : 256;
+    pend *np = realloc(bk->p, (size_t)cap * sizeof *np);
+    if (!np) return 0;
+    bk->p = np;
+    bk->cap = cap;
+    return 1;
+}
+
+/* A bucket no sheet reads again gives its array to the next new one. */
+static void retire_bucket(tile_state *ts, pend_bucket *bk)
+{
+    if (!ts->spare || ts->spare_cap < bk->cap) {
+        free(ts->spare);
+        ts->spare = bk->p;
+        ts->spare_cap = bk->cap;
+    } else {
+        free(bk->p);
+    }
+    bk->p = NULL;
+    bk->n = bk->cap = 0;
+}
+
 /* Open brick b: cull it whole if its footprints can only land on opaque
  * pixels, else project its voxels and bucket those that reach this tile. */
 static void expand_brick(tile_state *ts, uint32_t b, int opening)
@@ -469,31 +507,18 @@ static void expand_brick(tile_state *ts, uint32_t b, int opening)
         if (kf < opening) kf = opening; /* rounding guard: the brick bound is conservative */
         if (kl > ts->kmax) kl = ts->kmax;
         if (kl < kf) continue;
-        if (ts->np == ts->cap) {
-            int cap = ts->cap ? 2 * ts->cap : 1024;
-            pend *np = realloc(ts->p, (size_t)cap * sizeof *np);
-            if (!np) {
-                ts->failed = 1;
-                return;
-            }
-            ts->p = np;
-            ts->cap = cap;
+        pend_bucket *bk = &ts->bk[kf - ts->kmin];
+        if (bk->n == bk->cap && !grow_bucket(ts, bk)) {
+            ts->failed = 1;
+            return;
         }
-        pend *e = &ts->p[ts->np];
+        pend *e = &bk->p[bk->n++];
         e->x = x;
         e->y = y;
         e->z = z;
         e->v = v;
         e->kl = kl;
-        e->next = -1;
         if (!F->use_blocks) voxel_weights(F, v, e->w); /* else once it survives culling */
-        int slot = kf - ts->kmin;
-        if (ts->tail[slot] >= 0)
-            ts->p[ts->tail[slot]].next = ts->np;
-        else
-            ts->head[slot] = ts->np;
-        ts->tail[slot] = ts->np;
-        ts->np++;
     }
 }
 
@@ -506,12 +531,15 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
     const vs_frame *F = t->F;
     int keep = 0;
     for (int a = 0; a < ts->nactive; a++)
-        if (ts->p[ts->active[a]].kl >= k) ts->active[keep++] = ts->active[a];
+        if (ts->active[a]->kl >= k) ts->active[keep++] = ts->active[a];
     ts->nactive = keep;
-    for (int e = ts->head[k - ts->kmin]; e >= 0; e = ts->p[e].next) {
+    /* bucket k is complete (bricks open no later than their first sheet),
+     * so its array no longer moves and the pointers stay valid */
+    const pend_bucket *bk = &ts->bk[k - ts->kmin];
+    for (int i = 0; i < bk->n; i++) {
         if (ts->nactive == ts->cap_active) {
             int cap = ts->cap_active ? 2 * ts->cap_active : 1024;
-            int *na = realloc(ts->active, (size_t)cap * sizeof *na);
+            pend **na = realloc(ts->active, (size_t)cap * sizeof *na);
             if (!na) {
                 ts->failed = 1;
                 return;
@@ -519,10 +547,10 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
             ts->active = na;
             ts->cap_active = cap;
         }
-        ts->active[ts->nactive++] = e;
+        ts->active[ts->nactive++] = &bk->p[i];
     }
     for (int a = 0; a < ts->nactive; a++) {
-        pend *e = &ts->p[ts->active[a]];
+        pend *e = ts->active[a];
         if (F->s->occlusion && *ts->opaque > 0) {
             float box[4] = {e->x, e->x, e->y, e->y}, sc = 1.0f;
             if (F->cam.persp) voxel_box(F, e->x, e->y, e->z, box, &sc);
@@ -591,11 +619,12 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) slots[j] = (opening + j - kbase) % R;
     const char *vdata = F->vol->data;
     const size_t vsize = vs_type_size(F->vol->type);
-    for (int i = ts->head[opening - ts->kmin]; i >= 0; i = ts->p[i].next) {
-        const pend *e = &ts->p[i];
-        /* the next voxel's value is a cache miss in the volume: ask for it
-         * while this one is splatted */
-        if (e->next >= 0) __builtin_prefetch(vdata + (size_t)ts->p[e->next].v * vsize);
+    pend_bucket *bk = &ts->bk[opening - ts->kmin];
+    for (int i = 0; i < bk->n; i++) {
+        const pend *e = &bk->p[i];
+        /* a voxel's value is a cache miss in the volume: ask for it a few
+         * voxels ahead */
+        if (i + 4 < bk->n) __builtin_prefetch(vdata + (size_t)bk->p[i + 4].v * vsize);
         if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y, 1.0f)) {
             ts->ws->culled++;
             continue;
@@ -679,6 +708,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             merge_box(&bbs[slot], &box);
         }
     }
+    retire_bucket(ts, bk);
 }
 
 static inline float lookup_corr(const vs_frame *F, const float *table, float v)
@@ -899,13 +929,11 @@ void vs_tile_render(void *arg, int worker, int task)
     if (nbr > 0) {
         int span = kmax - kmin + 1;
         bucket = calloc((size_t)span + 1, sizeof(int));
-        ts.head = malloc((size_t)span * sizeof(int));
-        ts.tail = malloc((size_t)span * sizeof(int));
-        if (!bucket || !ts.head || !ts.tail) {
+        ts.bk = calloc((size_t)span, sizeof *ts.bk);
+        if (!bucket || !ts.bk) {
             atomic_store(&F->error, 1);
             goto done;
         }
-        for (int b = 0; b < span; b++) ts.head[b] = ts.tail[b] = -1;
         for (int e = 0; e < nbr; e++) bucket[kfb[e] - kmin + 1]++;
         for (int b = 0; b < span; b++) bucket[b + 1] += bucket[b];
         for (int e = 0; e < nbr; e++) order[bucket[kfb[e] - kmin]++] = e; /* stable */
@@ -1084,9 +1112,9 @@ done:
     free(acc);
     free(kfb);
     free(order);
-    free(ts.p);
-    free(ts.head);
-    free(ts.tail);
+    for (int b = 0; ts.bk && b <= ts.kmax - ts.kmin; b++) free(ts.bk[b].p);
+    free(ts.bk);
+    free(ts.spare);
     free(ts.active);
     free(sheets);
     free(ring);
