@@ -379,10 +379,9 @@ static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
 /* Is every tile pixel that a footprint centred in [x0,x1] x [y0,y1] and
  * scaled by at most sc (plus the central-difference seam) can reach already
  * opaque? */
-static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1, float sc)
+static inline int box_occluded_pad(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1,
+                                   float px, float py)
 {
-    const vs_frame *F = t->F;
-    const float px = (float)F->pad_x * sc, py = (float)F->pad_y * sc;
     int xa = vs_ifloor(x0 - px) - t->x0, xb = vs_iceil(x1 + px) - t->x0;
     int ya = vs_ifloor(y0 - py) - t->y0, yb = vs_iceil(y1 + py) - t->y0;
     if (xa < 0) xa = 0;
@@ -393,6 +392,13 @@ static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, f
     int w = t->tw + 1;
     int sum = sat[(yb + 1) * w + xb + 1] - sat[ya * w + xb + 1] - sat[(yb + 1) * w + xa] + sat[ya * w + xa];
     return sum == (xb - xa + 1) * (yb - ya + 1);
+}
+
+/* The same with the frame's footprint reach scaled by sc. */
+static int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1, float sc)
+{
+    const vs_frame *F = t->F;
+    return box_occluded_pad(t, sat, x0, x1, y0, y1, (float)F->pad_x * sc, (float)F->pad_y * sc);
 }
 
 /* Perspective: the image box of a voxel's section centres over the sheets
@@ -620,12 +626,14 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     const char *vdata = F->vol->data;
     const size_t vsize = vs_type_size(F->vol->type);
     pend_bucket *bk = &ts->bk[opening - ts->kmin];
+    const int occlusion = F->s->occlusion;
+    const float pad_x = (float)F->pad_x, pad_y = (float)F->pad_y; /* box_occluded at scale 1 */
     for (int i = 0; i < bk->n; i++) {
         const pend *e = &bk->p[i];
         /* a voxel's value is a cache miss in the volume: ask for it a few
          * voxels ahead */
         if (i + 4 < bk->n) __builtin_prefetch(vdata + (size_t)bk->p[i + 4].v * vsize);
-        if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, e->x, e->x, e->y, e->y, 1.0f)) {
+        if (occlusion && *ts->opaque > 0 && box_occluded_pad(t, ts->sat, e->x, e->x, e->y, e->y, pad_x, pad_y)) {
             ts->ws->culled++;
             continue;
         }
