@@ -530,8 +530,9 @@ static void check_dispatch(void)
         CHECK(k.isa == want, "cap %s gave %s, expected %s", vs_isa_name((vs_isa)cap), vs_isa_name(k.isa),
               vs_isa_name(want));
         CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.splat_block_mix &&
-                  k.classify_cd &&
-                  k.classify_gs && k.shade_lut, "cap %s: empty entry",
+                  k.classify_cd && k.classify_gs && k.shade_lut && k.splat_voxel1 && k.splat_voxel4 &&
+                  k.project_brick,
+              "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
     vs_kernels k;
