@@ -99,6 +99,10 @@ void vs_block_build(const vs_block_geom *g, const vs_block_place *p, int j0, int
  * rows from them in registers, vs_block_build into memory). */
 void vs_block_factors(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *cw,
                       float *rw);
+/* The same for vectors of ch floats a pixel whatever g's own layout (the
+ * skewed tables serve one- and four-channel sheets). */
+void vs_block_factors_ch(const vs_block_geom *g, const vs_block_place *p, int ch, int j0, int j1, int v0, int v1,
+                         float *cw, float *rw);
 
 /* Most pixels a block row or column may span (vs_block_setup refuses more). */
 #define VS_BLOCK_MAX_SPAN 4096

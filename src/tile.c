@@ -197,6 +197,43 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
     }
 }
 
+/* A sheared footprint whose rows all share one column phase (no skew:
+ * row_shift 0, e.g. anisotropic voxels seen with an axis in the image
+ * plane, or perspective sheets of isotropic ones) is a column times a row
+ * weight, like a separable one: the fused voxel kernels build its rows in
+ * registers and add them, with the products and threshold of
+ * vs_block_build_skewed's uniform case, so the sheet gets the same floats
+ * as from the block.  0 when the block is too wide for them. */
+static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb)
+{
+    const vs_frame *F = t->F;
+    const vs_block_geom *g = sec->g;
+    const int ppv = 8 / ch, nvec = (g->nx * ch + 7) / 8;
+    vs_block_place p;
+    vs_block_place_at(g, sec->cx, sec->cy, &p);
+    const int by = p.y - t->oy, bx = p.x - t->ox;
+    const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+    const int v0 = bx < 0 ? -bx / ppv : 0;
+    int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+    if (v1 > nvec) v1 = nvec;
+    if (j0 >= j1 || v0 >= v1) return 1;
+    if ((v1 - v0) * ppv > VS_VOXEL1_MAX) return 0;
+    const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
+    float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+    float cw[VS_VOXEL1_MAX + 8] = {0}, rw[VS_BLOCK_MAX_SPAN], w[4];
+    vs_block_factors_ch(g, &p, ch, j0, j1, v0, v1, cw, rw);
+    if (ch == 1) {
+        w[0] = w4[0] * sec->D;
+        F->kern.splat_voxel1(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+    } else {
+        for (int c = 0; c < 4; c++) w[c] = w4[c] * sec->D;
+        F->kern.splat_voxel4(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+    }
+    const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
+    merge_box(bb, &box);
+    return 1;
+}
+
 /* A general footprint as one skewed block (src/block.h) added by the
  * block kernel: density (post-cd, ch 1) or four channels with their own
  * weights (pre, post-alpha), or for post-gs (h, h dx, h dy, h) mixed into
@@ -208,6 +245,7 @@ static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[
     const vs_frame *F = t->F;
     const vs_block_geom *g = sec->g;
     const int ppv = 8 / ch, bs = 8 * F->skew_maxvec, gs = F->pipeline == VS_PIPELINE_POST_GS;
+    if (!gs && t->fp->row_shift == 0.0f && raster_unskewed(t, sec, w4, ch, dst, bb)) return;
     int x, y, nvec;
     vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, gs, F->skew_maxvec, t->blk, &x, &y, &nvec);
     const int by = y - t->oy, bx = x - t->ox;
