@@ -14,16 +14,6 @@
 
 static vs_context *ctx;
 
-static double max_diff(const vs_image *a, const vs_image *b)
-{
-    double m = 0;
-    for (size_t i = 0; i < (size_t)a->width * a->height * 4; i++) {
-        double d = fabs((double)a->rgba[i] - b->rgba[i]);
-        if (!(d <= m)) m = d; /* NaN counts as a difference */
-    }
-    return m;
-}
-
 /* Pixels with any opacity: a case that renders nothing shows nothing. */
 static int covered(const vs_image *img)
 {
@@ -53,7 +43,7 @@ static void check_case(const char *name, const vs_volume *v, const vs_settings *
                 CHECK(0, "%s %s %s: %s", name, vs_pipeline_name(s.pipeline), vs_isa_name(s.isa), vs_last_error(ctx));
                 continue;
             }
-            const double d = max_diff(&ref, &img);
+            const double d = tu_max_diff(&ref, &img);
             CHECK(d == 0.0, "%s %s: %s differs from scalar by %g", name, vs_pipeline_name(s.pipeline),
                   vs_isa_name(s.isa), d);
             vs_image_free(&img);

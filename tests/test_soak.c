@@ -59,16 +59,6 @@ static vs_volume *ball(int n, double cx, double cy, double cz, double r)
     return v;
 }
 
-static double max_diff(const vs_image *a, const vs_image *b)
-{
-    double m = 0;
-    for (size_t i = 0; i < (size_t)a->width * a->height * 4; i++) {
-        double d = fabs((double)a->rgba[i] - b->rgba[i]);
-        if (!(d <= m)) m = d;
-    }
-    return m;
-}
-
 /* Same dims and range, different content, probably the same address. */
 static void test_volume_replaced(void)
 {
@@ -96,7 +86,7 @@ static void test_volume_replaced(void)
         vs_context *c2;
         vs_context_create(&c2);
         vs_render(c2, b, &s, &fresh, NULL);
-        double d = max_diff(&ib, &fresh);
+        double d = tu_max_diff(&ib, &fresh);
         printf("volume replaced (%s address), %-10s: difference to a fresh context %.3g\n",
                (const void *)b == addr ? "same" : "other", vs_pipeline_name(s.pipeline), d);
         CHECK(d == 0.0, "%s: a new volume was drawn from the old one's cached voxels (difference %g)",
@@ -127,7 +117,7 @@ static void test_volume_rewritten(void)
         memcpy(vs_volume_data(a), vs_volume_data(b), (size_t)24 * 24 * 24 * sizeof(float));
         vs_volume_update_range(a);
         if (vs_render(ctx, a, &s, &ib, NULL) == VS_OK && vs_render(ctx, b, &s, &fresh, NULL) == VS_OK) {
-            double d = max_diff(&ib, &fresh);
+            double d = tu_max_diff(&ib, &fresh);
             printf("volume data rewritten in place: difference to the new data's image %.3g\n", d);
             CHECK(d == 0.0, "rewritten volume drawn from its old cached voxels (difference %g)", d);
             vs_image_free(&ib);

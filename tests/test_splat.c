@@ -43,16 +43,6 @@ static int has_nan(const vs_image *img)
     return 0;
 }
 
-static double max_diff(const vs_image *a, const vs_image *b)
-{
-    double m = 0;
-    for (size_t i = 0; i < (size_t)a->width * a->height * 4; i++) {
-        double d = fabs((double)a->rgba[i] - b->rgba[i]);
-        if (d > m) m = d;
-    }
-    return m;
-}
-
 /* b normalises the truncated kernel: integrate b 2^(-2 r^2) over the
  * cylinder |xy| <= R, |z| <= R numerically. */
 static void test_kernel_normalisation(void)
@@ -277,16 +267,16 @@ static void test_invariance(void)
         for (int t = 0; t < 3; t++) {
             s.threads = threads[t];
             if (render(v, &s, &img, &st)) {
-                CHECK(max_diff(&ref, &img) == 0.0, "%s threads %d differ by %g", vs_pipeline_name(s.pipeline),
-                      threads[t], max_diff(&ref, &img));
+                CHECK(tu_max_diff(&ref, &img) == 0.0, "%s threads %d differ by %g", vs_pipeline_name(s.pipeline),
+                      threads[t], tu_max_diff(&ref, &img));
                 vs_image_free(&img);
             }
         }
         s.threads = 2;
         s.tile_counters = 0;
         if (render(v, &s, &img, &st)) {
-            CHECK(max_diff(&ref, &img) == 0.0, "%s --no-tiles differs by %g", vs_pipeline_name(s.pipeline),
-                  max_diff(&ref, &img));
+            CHECK(tu_max_diff(&ref, &img) == 0.0, "%s --no-tiles differs by %g", vs_pipeline_name(s.pipeline),
+                  tu_max_diff(&ref, &img));
             vs_image_free(&img);
         }
         s.tile_counters = 1;
@@ -299,13 +289,13 @@ static void test_invariance(void)
             for (int i = 0; i < 3; i++) {
                 s.tile_size = sizes[i];
                 if (render(v, &s, &img, &st)) {
-                    CHECK(max_diff(&ref2, &img) == 0.0, "%s tile %d differs by %g (no culling)",
-                          vs_pipeline_name(s.pipeline), sizes[i], max_diff(&ref2, &img));
+                    CHECK(tu_max_diff(&ref2, &img) == 0.0, "%s tile %d differs by %g (no culling)",
+                          vs_pipeline_name(s.pipeline), sizes[i], tu_max_diff(&ref2, &img));
                     vs_image_free(&img);
                 }
             }
             /* culling changes pixels only past the opacity threshold */
-            double md = max_diff(&ref, &ref2);
+            double md = tu_max_diff(&ref, &ref2);
             printf("%-10s occlusion culling changes the image by at most %.2e\n", vs_pipeline_name(s.pipeline), md);
             CHECK(md <= 2.0 * (1.0 - s.occlusion_threshold) + 1e-6, "%s culling changed image by %g",
                   vs_pipeline_name(s.pipeline), md);
@@ -347,15 +337,15 @@ static void test_shading_table_cache(void)
         if (vs_render(c, v, &s[i], &fresh[i], NULL) != VS_OK) CHECK(0, "render: %s", vs_last_error(c));
         vs_context_release(c);
     }
-    CHECK(fresh[0].rgba && fresh[1].rgba && max_diff(&fresh[0], &fresh[1]) > 0.05,
+    CHECK(fresh[0].rgba && fresh[1].rgba && tu_max_diff(&fresh[0], &fresh[1]) > 0.05,
           "the light changes the image (else this test shows nothing)");
     const int order[] = {0, 1, 2, 0, 3, 1, 2, 3, 0};
     for (size_t n = 0; n < sizeof order / sizeof *order; n++) {
         const int i = order[n];
         vs_image img;
         if (!fresh[i].rgba || !render(v, &s[i], &img, NULL)) continue;
-        CHECK(max_diff(&img, &fresh[i]) == 0.0, "settings %d after %d: a reused context differs by %g", i,
-              n ? order[n - 1] : -1, max_diff(&img, &fresh[i]));
+        CHECK(tu_max_diff(&img, &fresh[i]) == 0.0, "settings %d after %d: a reused context differs by %g", i,
+              n ? order[n - 1] : -1, tu_max_diff(&img, &fresh[i]));
         vs_image_free(&img);
     }
     for (int i = 0; i < 4; i++) vs_image_free(&fresh[i]);

@@ -20,16 +20,6 @@
 static vs_context *ctx;
 static int quick; /* VSPLAT_TEST_QUICK: fewer thread counts and tile sizes */
 
-static double max_diff(const vs_image *a, const vs_image *b)
-{
-    double m = 0;
-    for (size_t i = 0; i < (size_t)a->width * a->height * 4; i++) {
-        double d = fabs((double)a->rgba[i] - b->rgba[i]);
-        if (!(d <= m)) m = d; /* NaN counts as a difference */
-    }
-    return m;
-}
-
 static int render(const vs_volume *v, const vs_settings *s, vs_image *img)
 {
     vs_stats st;
@@ -54,7 +44,7 @@ static void check_volume(const char *name, const vs_volume *v, const vs_settings
             vs_image img;
             s.threads = threads[i];
             if (!render(v, &s, &img)) continue;
-            double d = max_diff(&ref, &img);
+            double d = tu_max_diff(&ref, &img);
             CHECK(d == 0.0, "%s %s: %d threads differ from 1 thread by %g", name, vs_pipeline_name(s.pipeline),
                   threads[i], d);
             vs_image_free(&img);
@@ -71,7 +61,7 @@ static void check_volume(const char *name, const vs_volume *v, const vs_settings
                 vs_image img;
                 s.tile_size = sizes[i];
                 if (!render(v, &s, &img)) continue;
-                double d = max_diff(&ref_nocull, &img);
+                double d = tu_max_diff(&ref_nocull, &img);
                 CHECK(d == 0.0, "%s %s: tile %d differs from tile 64 by %g (culling off)", name,
                       vs_pipeline_name(s.pipeline), sizes[i], d);
                 vs_image_free(&img);
@@ -82,7 +72,7 @@ static void check_volume(const char *name, const vs_volume *v, const vs_settings
                 vs_image img;
                 s.tile_size = sizes[i];
                 if (!render(v, &s, &img)) continue;
-                double d = max_diff(&ref_nocull, &img);
+                double d = tu_max_diff(&ref_nocull, &img);
                 if (d > worst) worst = d;
                 vs_image_free(&img);
             }

@@ -2,6 +2,9 @@
  * code.  A test that needs absent data prints "SKIP: why" and returns 0. */
 #ifndef VS_TESTUTIL_H
 #define VS_TESTUTIL_H
+#include "vsplat.h"
+
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,6 +43,18 @@ static inline const char *tu_data_dir(void)
     snprintf(buf, sizeof buf, "%s/../shared/data", src);
     if (stat(buf, &st) == 0) return buf;
     return NULL;
+}
+
+/* Largest absolute difference of two images of the same size, over every
+ * channel; a NaN on either side counts as a difference. */
+static inline double tu_max_diff(const vs_image *a, const vs_image *b)
+{
+    double m = 0;
+    for (size_t i = 0; i < (size_t)a->width * a->height * 4; i++) {
+        double d = fabs((double)a->rgba[i] - b->rgba[i]);
+        if (!(d <= m)) m = d;
+    }
+    return m;
 }
 
 static inline const char *tu_tmpdir(void)
