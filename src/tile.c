@@ -367,6 +367,8 @@ typedef struct tile_state {
     int spare_cap;
     int kmin, kmax;
     pend **active;    /* sheet-at-a-time path: voxels overlapping the sheet */
+    float (*abox)[5]; /* perspective: each active voxel's voxel_box (box
+                         and scale), computed once, when it is admitted */
     int nactive, cap_active;
     const float *acc; /* the tile's accumulation (occlusion map = alpha)   */
     const int *sat;   /* summed-area table of opaque pixels                */
@@ -573,9 +575,13 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
 {
     const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
+    const int persp = F->cam.persp;
     int keep = 0;
     for (int a = 0; a < ts->nactive; a++)
-        if (ts->active[a]->kl >= k) ts->active[keep++] = ts->active[a];
+        if (ts->active[a]->kl >= k) {
+            if (persp) memcpy(ts->abox[keep], ts->abox[a], sizeof *ts->abox);
+            ts->active[keep++] = ts->active[a];
+        }
     ts->nactive = keep;
     /* bucket k is complete (bricks open no later than their first sheet),
      * so its array no longer moves and the pointers stay valid */
@@ -584,12 +590,21 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         if (ts->nactive == ts->cap_active) {
             int cap = ts->cap_active ? 2 * ts->cap_active : 1024;
             pend **na = realloc(ts->active, (size_t)cap * sizeof *na);
-            if (!na) {
+            if (na) ts->active = na;
+            float(*nb)[5] = persp && na ? realloc(ts->abox, (size_t)cap * sizeof *nb) : NULL;
+            if (nb) ts->abox = nb;
+            if (!na || (persp && !nb)) {
                 ts->failed = 1;
                 return;
             }
-            ts->active = na;
             ts->cap_active = cap;
+        }
+        const pend *e = &bk->p[i];
+        if (persp) { /* the box of its sections over all its sheets */
+            float *b = ts->abox[ts->nactive];
+            b[0] = b[1] = e->x;
+            b[2] = b[3] = e->y;
+            voxel_box(F, e->x, e->y, e->z, b, &b[4]);
         }
         ts->active[ts->nactive++] = &bk->p[i];
     }
@@ -597,7 +612,10 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         pend *e = ts->active[a];
         if (F->s->occlusion && *ts->opaque > 0) {
             float box[4] = {e->x, e->x, e->y, e->y}, sc = 1.0f;
-            if (F->cam.persp) voxel_box(F, e->x, e->y, e->z, box, &sc);
+            if (persp) {
+                memcpy(box, ts->abox[a], sizeof box);
+                sc = ts->abox[a][4];
+            }
             if (box_occluded(t, ts->sat, box[0], box[1], box[2], box[3], sc)) {
                 ts->ws->culled++;
                 e->kl = k - 1; /* dropped at the next update */
@@ -1162,6 +1180,7 @@ done:
     free(ts.bk);
     free(ts.spare);
     free(ts.active);
+    free(ts.abox);
     free(sheets);
     free(ring);
     free(bbox);
