@@ -56,11 +56,32 @@ typedef struct tile_ctx {
     float ry0;           /* footprint half-height without shift              */
 } tile_ctx;
 
+/* What every section on sheet k shares: its skewed tables (NULL: an
+ * exponential per pixel) and, with perspective, its scale about the image
+ * centre and the scale's inverse (1 when orthographic). */
+typedef struct sheet_geom {
+    const vs_block_geom *g;
+    float sk, isk;
+} sheet_geom;
+
+static sheet_geom sheet_geom_of(const vs_frame *F, int k)
+{
+    sheet_geom sh = {F->use_skewed ? &F->skew : NULL, 1.0f, 1.0f};
+    if (F->cam.persp) {
+        const int i = k - F->sheet_k0;
+        sh.g = i >= 0 && i < F->nsheet_skew && F->sheet_skew[i].ny > 0 ? &F->sheet_skew[i] : NULL;
+        sh.sk = (float)vs_camera_sheet_scale(&F->cam, k, F->fp.slab);
+        sh.isk = 1.0f / sh.sk;
+    }
+    return sh;
+}
+
 /* Compute the slab section of voxel at depth z for sheet k; 0 if empty.
  * (x, y) is the voxel's image position, with perspective its depth-0 one:
  * the section on sheet k's plane is centred on the same world point, which
  * appears scaled by the sheet's scale about the image centre. */
-static inline int make_section(const tile_ctx *t, float x, float y, float z, int k, section *sec)
+static inline int make_section(const tile_ctx *t, const sheet_geom *sh, float x, float y, float z, int k,
+                               section *sec)
 {
     const vs_footprint *fp = t->fp;
     float slab = (float)fp->slab;
@@ -71,25 +92,26 @@ static inline int make_section(const tile_ctx *t, float x, float y, float z, int
     float c0 = z0 < -rz ? -rz : (z0 > rz ? rz : z0);
     float c1 = z1 < -rz ? -rz : (z1 > rz ? rz : z1);
     float kap = (float)fp->kappa;
-    float e0 = vs_fp_exp(fp, kap * c0 * c0), e1 = vs_fp_exp(fp, kap * c1 * c1);
-    if (fabsf(c0) >= rz) e0 = 0.0f;
-    if (fabsf(c1) >= rz) e1 = 0.0f;
+    float e0 = 0.0f, e1 = 0.0f;
+    /* the depth derivative's integral: for gradient splats and the
+     * centroid of a sheared footprint only */
+    if (fp->sheared || t->F->pipeline == VS_PIPELINE_POST_GS) {
+        e0 = vs_fp_exp(fp, kap * c0 * c0);
+        e1 = vs_fp_exp(fp, kap * c1 * c1);
+        if (fabsf(c0) >= rz) e0 = 0.0f;
+        if (fabsf(c1) >= rz) e1 = 0.0f;
+    }
     sec->D = D;
     sec->E = e1 - e0;
     sec->cx = x;
     sec->cy = y;
-    sec->sc = sec->is = 1.0f;
-    if (!t->F->cam.persp) {
-        sec->g = t->F->use_skewed ? &t->F->skew : NULL;
-    } else {
-        const int i = k - t->F->sheet_k0;
-        sec->g = i >= 0 && i < t->F->nsheet_skew && t->F->sheet_skew[i].ny > 0 ? &t->F->sheet_skew[i] : NULL;
-        const float sk = (float)vs_camera_sheet_scale(&t->F->cam, k, fp->slab);
+    sec->sc = sh->sk;
+    sec->is = sh->isk;
+    sec->g = sh->g;
+    if (t->F->cam.persp) {
         const float cx = (float)t->F->cam.cx, cy = (float)t->F->cam.cy;
-        sec->cx = cx + (x - cx) * sk;
-        sec->cy = cy + (y - cy) * sk;
-        sec->sc = sk;
-        sec->is = 1.0f / sk;
+        sec->cx = cx + (x - cx) * sh->sk;
+        sec->cy = cy + (y - cy) * sh->sk;
     }
     if (fp->sheared) { /* centroid of the depth term within the slab */
         float zbar = (e0 - e1) / (2.0f * kap * D);
@@ -576,6 +598,7 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
     const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
     const int persp = F->cam.persp;
+    const sheet_geom sh = sheet_geom_of(F, k);
     int keep = 0;
     for (int a = 0; a < ts->nactive; a++)
         if (ts->active[a]->kl >= k) {
@@ -623,7 +646,7 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
             }
         }
         section sec;
-        if (!make_section(t, e->x, e->y, e->z, k, &sec)) continue;
+        if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
         if (sec.g) {
             raster_skewed(t, &sec, e->w, F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, dst, bb);
