@@ -242,8 +242,11 @@ static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4
     if ((v1 - v0) * ppv > VS_VOXEL1_MAX) return 0;
     const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
     float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
-    float cw[VS_VOXEL1_MAX + 8] = {0}, rw[VS_BLOCK_MAX_SPAN], w[4];
+    float cw[VS_VOXEL1_MAX + 8], rw[VS_BLOCK_MAX_SPAN], w[4];
     vs_block_factors_ch(g, &p, ch, j0, j1, v0, v1, cw, rw);
+    /* splat_voxel4 reads cw up to a multiple of 8 floats: defined zeros
+     * past the factors (not the whole array: this runs per section) */
+    if (ch == 4) memset(cw + 2 * (v1 - v0), 0, 8 * sizeof(float));
     if (ch == 1) {
         w[0] = w4[0] * sec->D;
         F->kern.splat_voxel1(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
@@ -752,7 +755,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         }
         if ((pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA) && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
             /* colour and opacity (or density): the same, four channels */
-            float cw[VS_VOXEL1_MAX + 8] = {0}, rw[VS_BLOCK_MAX_SPAN], w[4 * VS_MAX_VSPAN];
+            float cw[VS_VOXEL1_MAX + 8], rw[VS_BLOCK_MAX_SPAN], w[4 * VS_MAX_VSPAN];
             float *dst[VS_MAX_VSPAN];
             int ns = 0;
             for (int k = opening; k <= e->kl; k++) {
@@ -766,6 +769,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             }
             ts->ws->splatted += (uint64_t)ns;
             vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
+            memset(cw + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
             F->kern.splat_voxel4(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
             continue;
         }
