@@ -626,12 +626,8 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
             ts->cap_active = cap;
         }
         const pend *e = &bk->p[i];
-        if (persp) { /* the box of its sections over all its sheets */
-            float *b = ts->abox[ts->nactive];
-            b[0] = b[1] = e->x;
-            b[2] = b[3] = e->y;
-            voxel_box(F, e->x, e->y, e->z, b, &b[4]);
-        }
+        if (persp) /* the box of its sections over all its sheets */
+            voxel_box(F, e->x, e->y, e->z, ts->abox[ts->nactive], &ts->abox[ts->nactive][4]);
         ts->active[ts->nactive++] = &bk->p[i];
     }
     for (int a = 0; a < ts->nactive; a++) {
