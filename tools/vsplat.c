@@ -87,17 +87,27 @@ static int load_input(vs_context *ctx, const cli_opts *o, vs_volume **vol)
 
 /* ---- stats ---- */
 
+/* The stats as JSON in a new buffer (its length in *len), or NULL with a
+ * message naming `what` when out of memory. */
+static char *stats_json(const vs_stats *st, const char *what, size_t *len)
+{
+    *len = vs_stats_to_json(st, NULL, 0);
+    char *buf = malloc(*len + 1);
+    if (!buf) {
+        fprintf(stderr, "vsplat: %s: out of memory\n", what);
+        return NULL;
+    }
+    vs_stats_to_json(st, buf, *len + 1);
+    return buf;
+}
+
 /* JSON into "<path>.tmp.<pid>"; renamed into place by the caller. */
 static int write_stats_tmp(const vs_stats *st, const char *path, char *tmp, size_t tmpcap)
 {
     snprintf(tmp, tmpcap, "%s.tmp.%ld", path, (long)getpid());
-    size_t need = vs_stats_to_json(st, NULL, 0);
-    char *buf = malloc(need + 1);
-    if (!buf) {
-        fprintf(stderr, "vsplat: %s: out of memory\n", path);
-        return EXIT_INTERNAL;
-    }
-    vs_stats_to_json(st, buf, need + 1);
+    size_t need;
+    char *buf = stats_json(st, path, &need);
+    if (!buf) return EXIT_INTERNAL;
     FILE *f = fopen(tmp, "wb");
     if (!f) {
         fprintf(stderr, "vsplat: %s: cannot write: %s\n", path, strerror(errno));
@@ -118,13 +128,9 @@ static int write_stats_tmp(const vs_stats *st, const char *path, char *tmp, size
 /* --stats -: the JSON on stdout. */
 static int print_stats_json(const vs_stats *st)
 {
-    size_t need = vs_stats_to_json(st, NULL, 0);
-    char *buf = malloc(need + 1);
-    if (!buf) {
-        fprintf(stderr, "vsplat: stats: out of memory\n");
-        return EXIT_INTERNAL;
-    }
-    vs_stats_to_json(st, buf, need + 1);
+    size_t need;
+    char *buf = stats_json(st, "stats", &need);
+    if (!buf) return EXIT_INTERNAL;
     int ok = fwrite(buf, 1, need, stdout) == need && fflush(stdout) == 0;
     free(buf);
     if (!ok) fprintf(stderr, "vsplat: stats: cannot write to standard output: %s\n", strerror(errno));
