@@ -17,7 +17,8 @@ typedef struct kernel_entry {
     vs_isa isa;
     int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
                  8 gradient-splat block (mixing), 9 project_brick (8n voxels),
-                 10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets) */
+                 10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets),
+                 12 place_voxels (n voxels in batches of 16) */
     void *fn;
 } kernel_entry;
 
@@ -43,6 +44,12 @@ typedef struct shade_bench {
     uint16_t vox[VS_PROJECT_MAX], keep[VS_PROJECT_MAX];
     float xyz[3 * VS_PROJECT_MAX];
     vs_project_in P;
+    /* place_voxels: a 64 x 64 tile whose left half is opaque, voxels
+     * across it (a third culled), five slabs of a 257-entry depth table */
+    int sat[65 * 65];
+    float pend[VS_PLACE_BATCH * 9], depth[258];
+    vs_place_in PL;
+    vs_placed placed;
 } shade_bench;
 
 static void shade_bench_init(shade_bench *B)
@@ -77,6 +84,17 @@ static void shade_bench_init(shade_bench *B)
     B->P = (vs_project_in){.base = {100.0f, 100.0f, 50.0f},
                            .m = {{c, 0.0f, sn}, {0.0f, 2.26f, 0.0f}, {-sn, 0.0f, c}},
                            .px = 5.5f, .py = 5.5f, .bx0 = 90.0f, .bx1 = 113.0f, .by0 = 80.0f, .by1 = 100.0f};
+    for (int y = 0; y <= 64; y++)
+        for (int x = 0; x <= 64; x++) B->sat[y * 65 + x] = y * (x < 32 ? x : 32);
+    for (int i = 0; i < 258; i++) B->depth[i] = (float)i / 256.0f;
+    for (int i = 0; i < VS_PLACE_BATCH; i++) {
+        B->pend[9 * i] = 100.0f + 4.1f * (float)i;
+        B->pend[9 * i + 1] = 120.0f + 2.3f * (float)(i % 7);
+        B->pend[9 * i + 2] = 12.5f + 0.13f * (float)i;
+    }
+    B->PL = (vs_place_in){.sat = B->sat, .tx0 = 96, .ty0 = 96, .tw = 64, .th = 64, .pad_x = 5.5f, .pad_y = 5.5f,
+                          .rx0 = 4.8f, .ry0 = 4.8f, .phases = 256.0f, .ox = 95, .oy = 95, .slab = 1.0f, .rz = 2.0f,
+                          .depth_scale = 64.0f, .depth = B->depth, .depth_n = 257, .opening = 10, .nd = 5};
     B->T = (vs_shade_tabs){.vmin = 0.0, .scale = 4095.0 / 100.0, .alpha = B->atab, .color = B->color,
                            .slab = 0.5f, .two_slab = 1.0f, .ppm = 1.0f, .zpm = 1.0f, .nl = SHADE_NL,
                            .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,
@@ -132,6 +150,13 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                                        0.1f,  0.3f, 0.5f,  0.7f, 0.9f, 0.8f, 0.7f, 0.6f};
                 ((vs_splat_voxel1_fn)k->fn)(d4, w16, 4, BLOCK_DS, ex, ex + 64, BLOCK_ROWS, block_nvec(n), 1e-6f);
             } break;
+            case 12:
+                for (int b = 0; b < n; b += VS_PLACE_BATCH) {
+                    volatile unsigned live = ((vs_place_voxels_fn)k->fn)(
+                        B->pend, 9, n - b < VS_PLACE_BATCH ? n - b : VS_PLACE_BATCH, &B->PL, &B->placed);
+                    (void)live;
+                }
+                break;
             case 9: {
                 volatile int kept = ((vs_project_brick_fn)k->fn)(B->vox, 8 * n, &B->P, B->keep, B->xyz);
                 (void)kept;
@@ -211,6 +236,9 @@ int bench_kernels(const bench_opts *o)
         {"project_brick", VS_ISA_SCALAR, 9, (void *)vs_project_brick_scalar},
         {"project_brick", VS_ISA_AVX2, 9, (void *)vs_project_brick_avx2},
         {"project_brick", VS_ISA_AVX512, 9, (void *)vs_project_brick_avx512},
+        {"place_voxels", VS_ISA_SCALAR, 12, (void *)vs_place_voxels_scalar},
+        {"place_voxels", VS_ISA_AVX2, 12, (void *)vs_place_voxels_avx2},
+        {"place_voxels", VS_ISA_AVX512, 12, (void *)vs_place_voxels_avx512},
     };
     const int lengths[] = {9, 64};
     const int nmax = 64 + 64 + 8;

@@ -209,3 +209,75 @@ void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
         }
     }
 }
+
+/* floor and ceil as src/footprint.h's vs_ifloor, vs_iceil */
+static inline int ifloor(float v)
+{
+    const int i = (int)v;
+    return i - (v < (float)i);
+}
+static inline int iceil(float v)
+{
+    const int i = (int)v;
+    return i + (v > (float)i);
+}
+
+/* G(z) as src/footprint.h's vs_fp_depth */
+static inline float depth_at(const vs_place_in *P, float z)
+{
+    const float x = (z + P->rz) * P->depth_scale;
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= (float)(P->depth_n - 1)) return P->depth[P->depth_n - 1];
+    const int i = (int)x;
+    const float f = x - (float)i;
+    return P->depth[i] + f * (P->depth[i + 1] - P->depth[i]);
+}
+
+/* the tile pixels within pad of (x, y) all opaque, or none of them */
+static inline int occluded(const vs_place_in *P, float x, float y)
+{
+    int xa = ifloor(x - P->pad_x) - P->tx0, xb = iceil(x + P->pad_x) - P->tx0;
+    int ya = ifloor(y - P->pad_y) - P->ty0, yb = iceil(y + P->pad_y) - P->ty0;
+    if (xa < 0) xa = 0;
+    if (ya < 0) ya = 0;
+    if (xb > P->tw - 1) xb = P->tw - 1;
+    if (yb > P->th - 1) yb = P->th - 1;
+    if (xa > xb || ya > yb) return 1;
+    const int w = P->tw + 1;
+    const int *s = P->sat;
+    const int sum = s[(yb + 1) * w + xb + 1] - s[ya * w + xb + 1] - s[(yb + 1) * w + xa] + s[ya * w + xa];
+    return sum == (xb - xa + 1) * (yb - ya + 1);
+}
+
+/* a block's first pixel and phase along one axis (vs_block_place_at) */
+static inline void place_axis(float c, float r0, float phases, int *p, int *q, float *f)
+{
+    const float l = c - r0, a = (float)iceil(l), s = (a - l) * phases;
+    *p = (int)a;
+    *q = (int)s;
+    if (*q > (int)phases - 1) *q = (int)phases - 1;
+    *f = s - (float)*q;
+}
+
+unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out)
+{
+    unsigned live = 0;
+    for (int i = 0; i < n; i++) {
+        const float *c = xyz + (ptrdiff_t)i * stride;
+        const float x = c[0], y = c[1], z = c[2];
+        if (P->sat && occluded(P, x, y)) continue;
+        live |= 1u << i;
+        int px, py;
+        place_axis(x, P->rx0, P->phases, &px, &out->qx[i], &out->fx[i]);
+        place_axis(y, P->ry0, P->phases, &py, &out->qy[i], &out->fy[i]);
+        out->bx[i] = px - P->ox;
+        out->by[i] = py - P->oy;
+        float g0 = depth_at(P, (float)P->opening * P->slab - z);
+        for (int j = 0; j < P->nd; j++) {
+            const float g1 = depth_at(P, (float)(P->opening + j + 1) * P->slab - z);
+            out->D[j][i] = g1 - g0;
+            g0 = g1;
+        }
+    }
+    return live;
+}

@@ -53,6 +53,34 @@ typedef struct vs_project_in {
 /* Most voxels one brick holds (VS_BRICK^3, src/relevant.h). */
 #define VS_PROJECT_MAX 512
 
+/* Voxels one place_voxels call takes at most. */
+#define VS_PLACE_BATCH 16
+/* What place_voxels needs: the tile's occlusion map, the footprint block's
+ * geometry and the depth integral's table (src/tile.c, src/block.h,
+ * src/footprint.h). */
+typedef struct vs_place_in {
+    const int *sat;         /* summed-area table of the tile's opaque pixels,
+                               tw + 1 ints a row; NULL: no occlusion test    */
+    int tx0, ty0, tw, th;   /* the tile's own pixels (image coordinates)     */
+    float pad_x, pad_y;     /* the footprint's reach plus the seam (pixels)  */
+    float rx0, ry0;         /* block half-extents (vs_block_geom)            */
+    float phases;           /* VS_BLOCK_PHASES                               */
+    int ox, oy;             /* image coordinates of buffer pixel (0, 0)      */
+    float slab, rz;         /* slab thickness, kernel depth radius           */
+    float depth_scale;      /* table entries per unit of depth               */
+    const float *depth;     /* G(z), depth_n entries (vs_fp_depth)           */
+    int depth_n;
+    int opening, nd;        /* first sheet, and how many slabs from it       */
+} vs_place_in;
+/* Per voxel lane: its block's placement (vs_block_place_at, relative to
+ * the buffer) and the depth integrals over slabs opening .. opening+nd-1. */
+typedef struct vs_placed {
+    int bx[VS_PLACE_BATCH], by[VS_PLACE_BATCH]; /* block pixel (0,0) in the buffer */
+    int qx[VS_PLACE_BATCH], qy[VS_PLACE_BATCH]; /* phase-table rows                */
+    float fx[VS_PLACE_BATCH], fy[VS_PLACE_BATCH];
+    float D[VS_MAX_SHEETS_VOXEL][VS_PLACE_BATCH];
+} vs_placed;
+
 typedef struct vs_kernels {
     vs_isa isa; /* the ISA cap in force (what the stats report) */
     /* row[i] += w * ex[i], i in [0, n) */
@@ -112,9 +140,21 @@ typedef struct vs_kernels {
      * cw must be readable (any values) up to a multiple of 8 floats */
     void (*splat_voxel4)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                          int rows, int nvec, float thr);
+    /* activation of n (<= VS_PLACE_BATCH) voxels whose centres x, y, z lie
+     * at xyz[i stride ..]: bit i of the result is set unless voxel i is
+     * occluded (P->sat: every tile pixel within pad of its centre opaque,
+     * or none at all), and for those set, out's lane i holds the block
+     * placement and the nd slab integrals
+     *   D[j] = G((opening + j + 1) slab - z) - G((opening + j) slab - z)
+     * exactly as src/tile.c and src/block.h compute them one by one */
+    unsigned (*place_voxels)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 } vs_kernels;
 
 /* Scalar reference kernels (src/kernels.c). */
+typedef unsigned (*vs_place_voxels_fn)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 void vs_splat_row1_scalar(float *row, const float *ex, float w, int n);
 void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n);
 void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n);

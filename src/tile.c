@@ -704,95 +704,112 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     const char *vdata = F->vol->data;
     const size_t vsize = vs_type_size(F->vol->type);
     pend_bucket *bk = &ts->bk[opening - ts->kmin];
-    const int occlusion = F->s->occlusion;
-    const float pad_x = (float)F->pad_x, pad_y = (float)F->pad_y; /* box_occluded at scale 1 */
-    for (int i = 0; i < bk->n; i++) {
-        const pend *e = &bk->p[i];
-        /* a voxel's value is a cache miss in the volume: ask for it a few
-         * voxels ahead */
-        if (i + 4 < bk->n) __builtin_prefetch(vdata + (size_t)bk->p[i + 4].v * vsize);
-        if (occlusion && *ts->opaque > 0 && box_occluded_pad(t, ts->sat, e->x, e->x, e->y, e->y, pad_x, pad_y)) {
-            ts->ws->culled++;
-            continue;
-        }
-        vs_block_place pl_;
-        vs_block_place_at(g, e->x, e->y, &pl_);
-        /* rows [j0, j1) and vectors [v0, v1) of the block inside the buffer */
-        int by = pl_.y - t->oy, bx = pl_.x - t->ox;
-        int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
-        int v0 = bx < 0 ? -bx / ppv : 0;
-        int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
-        if (v1 > g->nvec) v1 = g->nvec;
-        if (j0 >= j1 || v0 >= v1) continue;
-        const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
-        const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
-        const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
-        float wv[4];
-        voxel_weights(F, e->v, wv);
-        float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
-        depth_weights(&F->fp, e->z, opening, e->kl, pl == VS_PIPELINE_POST_GS, D, E);
-        if (pl == VS_PIPELINE_POST_CD && 8 * (v1 - v0) <= VS_VOXEL1_MAX) {
-            /* density: the block is built in registers and added to every
-             * sheet in one kernel call */
-            float cw[VS_VOXEL1_MAX], rw[VS_BLOCK_MAX_SPAN], w[VS_MAX_VSPAN];
-            float *dst[VS_MAX_VSPAN];
-            int ns = 0;
-            for (int k = opening; k <= e->kl; k++) {
-                if (!(D[k - opening] > 0.0f)) continue;
+    /* occlusion test, placement and depth integrals a batch of voxels at a
+     * time (a SIMD kernel); the occlusion map does not change while a
+     * sheet is activated, so batching culls exactly what one by one did */
+    const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
+    const int nd = (int)ceilf(2.0f * rz / slab) + 1; /* sheets one kernel can reach */
+    const vs_place_in P = {.sat = F->s->occlusion && *ts->opaque > 0 ? ts->sat : NULL,
+                           .tx0 = t->x0, .ty0 = t->y0, .tw = t->tw, .th = t->th,
+                           .pad_x = (float)F->pad_x, .pad_y = (float)F->pad_y,
+                           .rx0 = g->rx0, .ry0 = g->ry0, .phases = (float)VS_BLOCK_PHASES,
+                           .ox = t->ox, .oy = t->oy, .slab = slab, .rz = rz,
+                           .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
+                           .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN};
+    vs_placed pv;
+    for (int i0 = 0; i0 < bk->n; i0 += VS_PLACE_BATCH) {
+        const int nb = bk->n - i0 < VS_PLACE_BATCH ? bk->n - i0 : VS_PLACE_BATCH;
+        /* a voxel's value is a cache miss in the volume: ask for the batch's
+         * values before placing it */
+        for (int l = 0; l < nb; l++) __builtin_prefetch(vdata + (size_t)bk->p[i0 + l].v * vsize);
+        unsigned live = F->kern.place_voxels(&bk->p[i0].x, (int)(sizeof(pend) / sizeof(float)), nb, &P, &pv);
+        ts->ws->culled += (uint64_t)(nb - __builtin_popcount(live));
+        for (; live; live &= live - 1) {
+            const int lane = __builtin_ctz(live);
+            const pend *e = &bk->p[i0 + lane];
+            const int kl = e->kl < opening + P.nd - 1 ? e->kl : opening + P.nd - 1;
+            /* rows [j0, j1) and vectors [v0, v1) of the block inside the buffer */
+            const int by = pv.by[lane], bx = pv.bx[lane];
+            const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+            const int v0 = bx < 0 ? -bx / ppv : 0;
+            int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+            if (v1 > g->nvec) v1 = g->nvec;
+            if (j0 >= j1 || v0 >= v1) continue;
+            /* the factor paths read only the phase rows and weights */
+            vs_block_place pl_ = {.x = bx + t->ox, .y = by + t->oy, .qx = pv.qx[lane], .qy = pv.qy[lane],
+                                  .fx = pv.fx[lane], .fy = pv.fy[lane]};
+            const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
+            const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
+            const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+            float wv[4];
+            voxel_weights(F, e->v, wv);
+            if (pl == VS_PIPELINE_POST_CD && 8 * (v1 - v0) <= VS_VOXEL1_MAX) {
+                /* density: the block is built in registers and added to every
+                 * sheet in one kernel call */
+                float cw[VS_VOXEL1_MAX], rw[VS_BLOCK_MAX_SPAN], w[VS_MAX_VSPAN];
+                float *dst[VS_MAX_VSPAN];
+                int ns = 0;
+                for (int k = opening; k <= kl; k++) {
+                    const float Dk = pv.D[k - opening][lane];
+                    if (!(Dk > 0.0f)) continue;
+                    const int slot = slots[k - opening];
+                    dst[ns] = ring[slot] + off;
+                    w[ns++] = wv[0] * Dk;
+                    merge_box(&bbs[slot], &box);
+                }
+                ts->ws->splatted += (uint64_t)ns;
+                vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
+                F->kern.splat_voxel1(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+                continue;
+            }
+            if ((pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA) && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
+                /* colour and opacity (or density): the same, four channels */
+                float cw[VS_VOXEL1_MAX + 8], rw[VS_BLOCK_MAX_SPAN], w[4 * VS_MAX_VSPAN];
+                float *dst[VS_MAX_VSPAN];
+                int ns = 0;
+                for (int k = opening; k <= kl; k++) {
+                    const float Dk = pv.D[k - opening][lane];
+                    if (!(Dk > 0.0f)) continue;
+                    const int slot = slots[k - opening];
+                    dst[ns] = ring[slot] + off;
+                    for (int c = 0; c < 4; c++) w[4 * ns + c] = wv[c] * Dk;
+                    ns++;
+                    merge_box(&bbs[slot], &box);
+                }
+                ts->ws->splatted += (uint64_t)ns;
+                vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
+                memset(cw + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
+                F->kern.splat_voxel4(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+                continue;
+            }
+            float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
+            depth_weights(&F->fp, e->z, opening, kl, pl == VS_PIPELINE_POST_GS, D, E);
+            vs_block_place_at(g, e->x, e->y, &pl_); /* the gradient layout needs the phases too */
+            vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
+            const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
+            for (int k = opening; k <= kl; k++) {
+                const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f,
+                                     1.0f, 1.0f, NULL};
+                if (!(sec.D > 0.0f)) continue;
+                ts->ws->splatted++;
                 const int slot = slots[k - opening];
-                dst[ns] = ring[slot] + off;
-                w[ns++] = wv[0] * D[k - opening];
+                float w8[8];
+                if (pl == VS_PIPELINE_POST_CD) {
+                    float w = wv[0] * sec.D;
+                    for (int c = 0; c < 8; c++) w8[c] = w;
+                } else if (pl == VS_PIPELINE_POST_GS) {
+                    float wD = wv[0] * sec.D;
+                    w8[0] = wD;
+                    w8[1] = -2.0f * wD * A;
+                    w8[2] = -2.0f * wD * rk;
+                    w8[3] = wv[0] * sec.E;
+                    for (int c = 4; c < 8; c++) w8[c] = w8[c - 4];
+                } else {
+                    for (int c = 0; c < 4; c++) w8[c] = w8[c + 4] = wv[c] * sec.D;
+                }
+                F->kern.splat_block(ring[slot] + off, ds, src, bs, j1 - j0, v1 - v0, w8);
                 merge_box(&bbs[slot], &box);
             }
-            ts->ws->splatted += (uint64_t)ns;
-            vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
-            F->kern.splat_voxel1(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
-            continue;
-        }
-        if ((pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA) && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
-            /* colour and opacity (or density): the same, four channels */
-            float cw[VS_VOXEL1_MAX + 8], rw[VS_BLOCK_MAX_SPAN], w[4 * VS_MAX_VSPAN];
-            float *dst[VS_MAX_VSPAN];
-            int ns = 0;
-            for (int k = opening; k <= e->kl; k++) {
-                const float Dk = D[k - opening];
-                if (!(Dk > 0.0f)) continue;
-                const int slot = slots[k - opening];
-                dst[ns] = ring[slot] + off;
-                for (int c = 0; c < 4; c++) w[4 * ns + c] = wv[c] * Dk;
-                ns++;
-                merge_box(&bbs[slot], &box);
-            }
-            ts->ws->splatted += (uint64_t)ns;
-            vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
-            memset(cw + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
-            F->kern.splat_voxel4(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
-            continue;
-        }
-        vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
-        const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
-        for (int k = opening; k <= e->kl; k++) {
-            const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f,
-                                 1.0f, 1.0f, NULL};
-            if (!(sec.D > 0.0f)) continue;
-            ts->ws->splatted++;
-            const int slot = slots[k - opening];
-            float w8[8];
-            if (pl == VS_PIPELINE_POST_CD) {
-                float w = wv[0] * sec.D;
-                for (int c = 0; c < 8; c++) w8[c] = w;
-            } else if (pl == VS_PIPELINE_POST_GS) {
-                float wD = wv[0] * sec.D;
-                w8[0] = wD;
-                w8[1] = -2.0f * wD * A;
-                w8[2] = -2.0f * wD * rk;
-                w8[3] = wv[0] * sec.E;
-                for (int c = 4; c < 8; c++) w8[c] = w8[c - 4];
-            } else {
-                for (int c = 0; c < 4; c++) w8[c] = w8[c + 4] = wv[c] * sec.D;
-            }
-            F->kern.splat_block(ring[slot] + off, ds, src, bs, j1 - j0, v1 - v0, w8);
-            merge_box(&bbs[slot], &box);
         }
     }
     retire_bucket(ts, bk);

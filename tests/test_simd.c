@@ -6,6 +6,7 @@
  * independent of the ISA.  ISAs the machine lacks are skipped with a message.
  * The whole-image suite runs once per forced ISA (VSPLAT_ISA, see
  * tests/CMakeLists.txt). */
+#include "block.h"
 #include "kernels.h"
 #include "testutil.h"
 
@@ -520,6 +521,161 @@ static void voxel4_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, 
             }
 }
 
+/* place_voxels: random tiles and opacity maps (none, sparse, dense, all
+ * opaque), voxel centres in and around the tile, some exactly on integer
+ * pixel edges (ifloor/iceil ties) or with the footprint's reach ending on
+ * one, depths below, inside and past the depth table, 0..16 voxels at
+ * stride 9 (the pending-voxel record), with and without the occlusion
+ * test.  The live mask and, for live lanes, every output must equal the
+ * reference's bit for bit.  With `truth`, the reference itself is checked
+ * against independent definitions: a brute-force count of opaque pixels,
+ * vs_block_place_at and vs_fp_depth.  Returns the mismatching cases. */
+enum { PL_TW = 70, PL_STRIDE = 9 };
+typedef struct place_fixture {
+    unsigned char opaque[PL_TW * PL_TW];
+    int sat[(PL_TW + 1) * (PL_TW + 1)];
+    float depth[258];
+} place_fixture;
+
+static int place_lane_same(const vs_placed *a, const vs_placed *b, int i, int nd)
+{
+    int same = a->bx[i] == b->bx[i] && a->by[i] == b->by[i] && a->qx[i] == b->qx[i] && a->qy[i] == b->qy[i] &&
+               !memcmp(&a->fx[i], &b->fx[i], sizeof(float)) && !memcmp(&a->fy[i], &b->fy[i], sizeof(float));
+    for (int j = 0; j < nd; j++) same &= !memcmp(&a->D[j][i], &b->D[j][i], sizeof(float));
+    return same;
+}
+
+/* the reference against definitions that share none of its code */
+static int place_truth(const place_fixture *X, const vs_place_in *P, const float *xyz, int n, unsigned live,
+                       const vs_placed *o)
+{
+    vs_footprint fp;
+    memset(&fp, 0, sizeof fp);
+    fp.rz = P->rz;
+    fp.depth_n = P->depth_n;
+    fp.depth_scale = P->depth_scale;
+    fp.depth_table = (float *)X->depth;
+    vs_block_geom g;
+    memset(&g, 0, sizeof g);
+    g.rx0 = P->rx0;
+    g.ry0 = P->ry0;
+    int bad = 0;
+    for (int i = 0; i < n; i++) {
+        const float x = xyz[i * PL_STRIDE], y = xyz[i * PL_STRIDE + 1], z = xyz[i * PL_STRIDE + 2];
+        int occluded = 0;
+        if (P->sat) {
+            int all = 1, any = 0;
+            for (int py = 0; py < P->th; py++)
+                for (int px = 0; px < P->tw; px++) {
+                    const float cx = (float)(px + P->tx0), cy = (float)(py + P->ty0);
+                    if (cx < floorf(x - P->pad_x) || cx > ceilf(x + P->pad_x) || cy < floorf(y - P->pad_y) ||
+                        cy > ceilf(y + P->pad_y))
+                        continue;
+                    any = 1;
+                    all &= X->opaque[py * P->tw + px];
+                }
+            occluded = !any || all;
+        }
+        if (occluded == !!(live >> i & 1u)) bad++;
+        if (occluded) continue;
+        vs_block_place pl;
+        vs_block_place_at(&g, x, y, &pl);
+        bad += pl.x - P->ox != o->bx[i] || pl.y - P->oy != o->by[i] || pl.qx != o->qx[i] || pl.qy != o->qy[i] ||
+               pl.fx != o->fx[i] || pl.fy != o->fy[i];
+        for (int j = 0; j < P->nd; j++) {
+            const float k0 = (float)(P->opening + j) * P->slab, k1 = (float)(P->opening + j + 1) * P->slab;
+            bad += vs_fp_depth(&fp, k1 - z) - vs_fp_depth(&fp, k0 - z) != o->D[j][i];
+        }
+    }
+    return bad;
+}
+
+static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
+{
+    static place_fixture X;
+    for (int i = 0; i < 258; i++) X.depth[i] = (float)i / 256.0f + 1e-3f * frand(); /* rising, uneven */
+    float xyz[VS_PLACE_BATCH * PL_STRIDE + 4];
+    int bad = 0, cases = 0;
+    for (int trial = 0; trial < 400; trial++) {
+        vs_place_in P;
+        memset(&P, 0, sizeof P);
+        P.tw = 1 + (int)((frand() + 1.0f) * 0.5f * (PL_TW - 1));
+        P.th = 1 + (int)((frand() + 1.0f) * 0.5f * (PL_TW - 1));
+        P.tx0 = (int)(200.0f * frand());
+        P.ty0 = (int)(200.0f * frand());
+        const int density = trial % 4; /* none, sparse, dense, all opaque */
+        for (int i = 0; i < P.tw * P.th; i++)
+            X.opaque[i] = density == 3 ? 1 : density == 0 ? 0 : (frand() + 1.0f) * 0.5f < (density == 1 ? 0.3f : 0.97f);
+        const int w = P.tw + 1;
+        for (int x = 0; x < w; x++) X.sat[x] = 0;
+        for (int y = 0; y < P.th; y++) {
+            int run = 0;
+            X.sat[(y + 1) * w] = 0;
+            for (int x = 0; x < P.tw; x++) {
+                run += X.opaque[y * P.tw + x];
+                X.sat[(y + 1) * w + x + 1] = X.sat[y * w + x + 1] + run;
+            }
+        }
+        P.sat = trial % 5 == 4 ? NULL : X.sat;
+        P.pad_x = trial % 3 == 0 ? 5.0f : 2.0f + 4.0f * (frand() + 1.0f);
+        P.pad_y = trial % 3 == 0 ? 4.0f : 2.0f + 4.0f * (frand() + 1.0f);
+        P.rx0 = 4.0f + 2.0f * frand();
+        P.ry0 = trial % 3 == 0 ? 5.0f : 4.0f + 2.0f * frand();
+        P.phases = (float)VS_BLOCK_PHASES;
+        P.ox = P.tx0 - 1;
+        P.oy = P.ty0 - 1;
+        const float slabs[] = {1.0f, 0.5f, 0.37f, 1.7f};
+        P.slab = slabs[trial % 4];
+        P.rz = 2.0f;
+        P.depth_n = 257;
+        P.depth_scale = (float)(P.depth_n - 1) / (2.0f * P.rz);
+        P.depth = X.depth;
+        P.nd = (int)ceilf(2.0f * P.rz / P.slab) + 1;
+        P.opening = (int)(40.0f * frand());
+        for (int i = 0; i < VS_PLACE_BATCH * PL_STRIDE + 4; i++) xyz[i] = 1e30f; /* guards between records */
+        for (int i = 0; i < VS_PLACE_BATCH; i++) {
+            float *c = xyz + i * PL_STRIDE;
+            c[0] = (float)P.tx0 + (frand() + 1.0f) * 0.5f * ((float)P.tw + 2.0f * P.pad_x + 6.0f) - P.pad_x - 3.0f;
+            c[1] = (float)P.ty0 + (frand() + 1.0f) * 0.5f * ((float)P.th + 2.0f * P.pad_y + 6.0f) - P.pad_y - 3.0f;
+            if (i % 5 == 1) c[0] = floorf(c[0]); /* on a pixel edge */
+            if (i % 5 == 2) c[1] = floorf(c[1]) + P.pad_y; /* reach ends on one */
+            /* depths from before the kernel's first slab to past its last */
+            c[2] = ((float)P.opening + 0.5f * (frand() + 1.0f)) * P.slab + P.rz + 0.7f * frand();
+        }
+        for (int n = 0; n <= VS_PLACE_BATCH; n++) {
+            vs_placed ro, oo;
+            memset(&ro, 0xA5, sizeof ro);
+            memset(&oo, 0x5A, sizeof oo);
+            const unsigned lr = vs_place_voxels_scalar(xyz, PL_STRIDE, n, &P, &ro);
+            const unsigned lo = fn(xyz, PL_STRIDE, n, &P, &oo);
+            int same = lr == lo && lr >> n == 0;
+            for (int i = 0; same && i < n; i++)
+                if (lr >> i & 1u) same = place_lane_same(&ro, &oo, i, P.nd);
+            if (truth) same &= place_truth(&X, &P, xyz, n, lr, &ro) == 0;
+            cases++;
+            if (!same) {
+                bad++;
+                if (isa) CHECK(0, "place_voxels %s: trial %d, %d voxels: live %#x vs %#x (reference)", isa, trial, n, lo, lr);
+            }
+        }
+    }
+    if (isa) printf("place_voxels  %-7s bit-identical to scalar in %d cases\n", isa, cases);
+    return bad;
+}
+
+/* a deliberately wrong activation: a voxel counts as occluded one pixel
+ * short of its reach on the right */
+static unsigned place_off(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out)
+{
+    vs_place_in Q = *P;
+    unsigned live = vs_place_voxels_scalar(xyz, stride, n, P, out);
+    if (!P->sat) return live;
+    Q.pad_x -= 1.0f;
+    vs_placed tmp;
+    const unsigned short_reach = vs_place_voxels_scalar(xyz, stride, n, &Q, &tmp);
+    return live & short_reach;
+}
+
 static void check_dispatch(void)
 {
     vs_isa best = vs_isa_detect();
@@ -531,7 +687,7 @@ static void check_dispatch(void)
               vs_isa_name(want));
         CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.splat_block_mix &&
                   k.classify_cd && k.classify_gs && k.shade_lut && k.splat_voxel1 && k.splat_voxel4 &&
-                  k.project_brick,
+                  k.project_brick && k.place_voxels,
               "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
@@ -559,6 +715,9 @@ int main(void)
           "check_voxel cannot tell a wrong kernel from the reference");
     CHECK(check_voxel(NULL, 4, vs_splat_voxel4_scalar, voxel4_off),
           "check_voxel (4 channels) cannot tell a wrong kernel from the reference");
+    CHECK(check_place(NULL, vs_place_voxels_scalar, 1) == 0,
+          "place_voxels scalar reference disagrees with the brute-force occlusion, vs_block_place_at or vs_fp_depth");
+    CHECK(check_place(NULL, place_off, 0) > 0, "check_place cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
         check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
@@ -579,6 +738,7 @@ int main(void)
         check_project("avx2", vs_project_brick_avx2);
         check_voxel("avx2", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx2);
         check_voxel("avx2", 4, vs_splat_voxel4_scalar, vs_splat_voxel4_avx2);
+        check_place("avx2", vs_place_voxels_avx2, 0);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
@@ -587,6 +747,7 @@ int main(void)
         check_block("avx512", vs_splat_block_avx512);
         check_project("avx512", vs_project_brick_avx512);
         check_voxel("avx512", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx512);
+        check_place("avx512", vs_place_voxels_avx512, 0);
     } else {
         printf("SKIP: avx512 kernels: this CPU has no AVX-512\n");
     }
