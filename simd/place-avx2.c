@@ -43,6 +43,18 @@ static inline void place8(__m256 c, float r0, float phases, __m256i *p, __m256i 
     *f = _mm256_sub_ps(s, _mm256_cvtepi32_ps(*q));
 }
 
+/* o[k] = t0[k] + f (t1[k] - t0[k]), k < n, t1 = t0 + n (block.c's lerp) */
+static inline void lerp8(float *o, const float *t0, int n, float f)
+{
+    const __m256 fv = _mm256_set1_ps(f);
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (int k = 0; k < n; k += 8) {
+        const __m256i m = _mm256_cmpgt_epi32(_mm256_set1_epi32(n - k), lane);
+        const __m256 a = _mm256_maskload_ps(t0 + k, m), b = _mm256_maskload_ps(t0 + n + k, m);
+        _mm256_maskstore_ps(o + k, m, _mm256_add_ps(a, _mm256_mul_ps(fv, _mm256_sub_ps(b, a))));
+    }
+}
+
 /* lanes h .. h + 7 of the batch; returns their live bits */
 static unsigned place_half(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out, int h)
 {
@@ -106,5 +118,12 @@ unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_plac
 {
     unsigned live = place_half(xyz, stride, n, P, out, 0);
     if (n > 8) live |= place_half(xyz, stride, n, P, out, 8);
+    if (P->colw)
+        for (unsigned m = live; m; m &= m - 1) {
+            const int i = __builtin_ctz(m);
+            lerp8(out->cw[i], P->colw + (size_t)out->qx[i] * P->bx, P->bx, out->fx[i]);
+            _mm256_storeu_ps(out->cw[i] + P->bx, _mm256_setzero_ps());
+            lerp8(out->rw[i], P->roww + (size_t)out->qy[i] * P->ny, P->ny, out->fy[i]);
+        }
     return live;
 }

@@ -44,6 +44,17 @@ static inline void place16(__m512 c, float r0, float phases, __m512i *p, __m512i
     *f = _mm512_sub_ps(s, _mm512_cvtepi32_ps(*q));
 }
 
+/* o[k] = t0[k] + f (t1[k] - t0[k]), k < n, t1 = t0 + n (block.c's lerp) */
+static inline void lerp16(float *o, const float *t0, int n, float f)
+{
+    const __m512 fv = _mm512_set1_ps(f);
+    for (int k = 0; k < n; k += 16) {
+        const __mmask16 m = n - k >= 16 ? (__mmask16)0xffff : (__mmask16)((1u << (n - k)) - 1u);
+        const __m512 a = _mm512_maskz_loadu_ps(m, t0 + k), b = _mm512_maskz_loadu_ps(m, t0 + n + k);
+        _mm512_mask_storeu_ps(o + k, m, _mm512_add_ps(a, _mm512_mul_ps(fv, _mm512_sub_ps(b, a))));
+    }
+}
+
 unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out)
 {
     const __mmask16 all = n >= 16 ? (__mmask16)0xffff : (__mmask16)((1u << n) - 1u);
@@ -92,5 +103,12 @@ unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_pl
         _mm512_storeu_ps(out->D[j], _mm512_sub_ps(g1, g0));
         g0 = g1;
     }
+    if (P->colw)
+        for (unsigned m = live; m; m &= m - 1) {
+            const int i = __builtin_ctz(m);
+            lerp16(out->cw[i], P->colw + (size_t)out->qx[i] * P->bx, P->bx, out->fx[i]);
+            _mm256_storeu_ps(out->cw[i] + P->bx, _mm256_setzero_ps());
+            lerp16(out->rw[i], P->roww + (size_t)out->qy[i] * P->ny, P->ny, out->fy[i]);
+        }
     return live;
 }

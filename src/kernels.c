@@ -278,6 +278,13 @@ unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_pl
             out->D[j][i] = g1 - g0;
             g0 = g1;
         }
+        if (!P->colw) continue;
+        const float *c0 = P->colw + (size_t)out->qx[i] * P->bx, *c1 = c0 + P->bx;
+        const float *r0 = P->roww + (size_t)out->qy[i] * P->ny, *r1 = r0 + P->ny;
+        const float fx = out->fx[i], fy = out->fy[i];
+        for (int k = 0; k < P->bx; k++) out->cw[i][k] = c0[k] + fx * (c1[k] - c0[k]);
+        for (int k = 0; k < 8; k++) out->cw[i][P->bx + k] = 0.0f;
+        for (int k = 0; k < P->ny; k++) out->rw[i][k] = r0[k] + fy * (r1[k] - r0[k]);
     }
     return live;
 }

@@ -71,6 +71,11 @@ typedef struct vs_place_in {
     const float *depth;     /* G(z), depth_n entries (vs_fp_depth)           */
     int depth_n;
     int opening, nd;        /* first sheet, and how many slabs from it       */
+    /* the block's column and row factors (vs_block_factors): phase tables
+     * of bx and ny entries a row (vs_block_geom colw, roww), or colw NULL
+     * for none; bx, ny <= VS_VOXEL1_MAX */
+    const float *colw, *roww;
+    int bx, ny;
 } vs_place_in;
 /* Per voxel lane: its block's placement (vs_block_place_at, relative to
  * the buffer) and the depth integrals over slabs opening .. opening+nd-1. */
@@ -79,6 +84,10 @@ typedef struct vs_placed {
     int qx[VS_PLACE_BATCH], qy[VS_PLACE_BATCH]; /* phase-table rows                */
     float fx[VS_PLACE_BATCH], fy[VS_PLACE_BATCH];
     float D[VS_MAX_SHEETS_VOXEL][VS_PLACE_BATCH];
+    /* with colw: the whole block's factors, columns (then 8 zeros, which
+     * splat_voxel4 may read) and rows, as vs_block_factors computes them */
+    float cw[VS_PLACE_BATCH][VS_VOXEL1_MAX + 8];
+    float rw[VS_PLACE_BATCH][VS_VOXEL1_MAX];
 } vs_placed;
 
 typedef struct vs_kernels {
@@ -146,7 +155,8 @@ typedef struct vs_kernels {
      * or none at all), and for those set, out's lane i holds the block
      * placement and the nd slab integrals
      *   D[j] = G((opening + j + 1) slab - z) - G((opening + j) slab - z)
-     * exactly as src/tile.c and src/block.h compute them one by one */
+     * and (with P->colw) the block's factors, exactly as src/tile.c and
+     * src/block.h compute them one by one */
     unsigned (*place_voxels)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 } vs_kernels;
 

@@ -715,7 +715,12 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                            .rx0 = g->rx0, .ry0 = g->ry0, .phases = (float)VS_BLOCK_PHASES,
                            .ox = t->ox, .oy = t->oy, .slab = slab, .rz = rz,
                            .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
-                           .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN};
+                           .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
+                           /* the voxel kernels' factors, for blocks they take whole */
+                           .colw = pl != VS_PIPELINE_POST_GS && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX
+                                       ? g->colw
+                                       : NULL,
+                           .roww = g->roww, .bx = g->bx, .ny = g->ny};
     vs_placed pv;
     for (int i0 = 0; i0 < bk->n; i0 += VS_PLACE_BATCH) {
         const int nb = bk->n - i0 < VS_PLACE_BATCH ? bk->n - i0 : VS_PLACE_BATCH;
@@ -738,6 +743,13 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             /* the factor paths read only the phase rows and weights */
             vs_block_place pl_ = {.x = bx + t->ox, .y = by + t->oy, .qx = pv.qx[lane], .qy = pv.qy[lane],
                                   .fx = pv.fx[lane], .fy = pv.fy[lane]};
+            /* the factors of the block's part inside the buffer */
+            float cwb[VS_VOXEL1_MAX + 8], rwb[VS_BLOCK_MAX_SPAN];
+            const float *cw = cwb, *rw = rwb;
+            if (P.colw) {
+                cw = pv.cw[lane] + v0 * ppv;
+                rw = pv.rw[lane] + j0;
+            }
             const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
             const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
             const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
@@ -746,7 +758,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             if (pl == VS_PIPELINE_POST_CD && 8 * (v1 - v0) <= VS_VOXEL1_MAX) {
                 /* density: the block is built in registers and added to every
                  * sheet in one kernel call */
-                float cw[VS_VOXEL1_MAX], rw[VS_BLOCK_MAX_SPAN], w[VS_MAX_VSPAN];
+                float w[VS_MAX_VSPAN];
                 float *dst[VS_MAX_VSPAN];
                 int ns = 0;
                 for (int k = opening; k <= kl; k++) {
@@ -758,13 +770,13 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                     merge_box(&bbs[slot], &box);
                 }
                 ts->ws->splatted += (uint64_t)ns;
-                vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
+                if (!P.colw) vs_block_factors(g, &pl_, j0, j1, v0, v1, cwb, rwb);
                 F->kern.splat_voxel1(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
                 continue;
             }
             if ((pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA) && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
                 /* colour and opacity (or density): the same, four channels */
-                float cw[VS_VOXEL1_MAX + 8], rw[VS_BLOCK_MAX_SPAN], w[4 * VS_MAX_VSPAN];
+                float w[4 * VS_MAX_VSPAN];
                 float *dst[VS_MAX_VSPAN];
                 int ns = 0;
                 for (int k = opening; k <= kl; k++) {
@@ -777,8 +789,10 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                     merge_box(&bbs[slot], &box);
                 }
                 ts->ws->splatted += (uint64_t)ns;
-                vs_block_factors(g, &pl_, j0, j1, v0, v1, cw, rw);
-                memset(cw + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
+                if (!P.colw) {
+                    vs_block_factors(g, &pl_, j0, j1, v0, v1, cwb, rwb);
+                    memset(cwb + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
+                }
                 F->kern.splat_voxel4(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
                 continue;
             }

@@ -535,13 +535,17 @@ typedef struct place_fixture {
     unsigned char opaque[PL_TW * PL_TW];
     int sat[(PL_TW + 1) * (PL_TW + 1)];
     float depth[258];
+    float colw[(VS_BLOCK_PHASES + 1) * VS_VOXEL1_MAX], roww[(VS_BLOCK_PHASES + 1) * VS_VOXEL1_MAX];
 } place_fixture;
 
-static int place_lane_same(const vs_placed *a, const vs_placed *b, int i, int nd)
+static int place_lane_same(const vs_placed *a, const vs_placed *b, int i, const vs_place_in *P)
 {
     int same = a->bx[i] == b->bx[i] && a->by[i] == b->by[i] && a->qx[i] == b->qx[i] && a->qy[i] == b->qy[i] &&
                !memcmp(&a->fx[i], &b->fx[i], sizeof(float)) && !memcmp(&a->fy[i], &b->fy[i], sizeof(float));
-    for (int j = 0; j < nd; j++) same &= !memcmp(&a->D[j][i], &b->D[j][i], sizeof(float));
+    for (int j = 0; j < P->nd; j++) same &= !memcmp(&a->D[j][i], &b->D[j][i], sizeof(float));
+    if (P->colw)
+        same &= !memcmp(a->cw[i], b->cw[i], (size_t)(P->bx + 8) * sizeof(float)) &&
+                !memcmp(a->rw[i], b->rw[i], (size_t)P->ny * sizeof(float));
     return same;
 }
 
@@ -559,6 +563,10 @@ static int place_truth(const place_fixture *X, const vs_place_in *P, const float
     memset(&g, 0, sizeof g);
     g.rx0 = P->rx0;
     g.ry0 = P->ry0;
+    g.colw = (float *)X->colw;
+    g.roww = (float *)X->roww;
+    g.bx = P->bx;
+    g.ny = P->ny;
     int bad = 0;
     for (int i = 0; i < n; i++) {
         const float x = xyz[i * PL_STRIDE], y = xyz[i * PL_STRIDE + 1], z = xyz[i * PL_STRIDE + 2];
@@ -586,6 +594,13 @@ static int place_truth(const place_fixture *X, const vs_place_in *P, const float
             const float k0 = (float)(P->opening + j) * P->slab, k1 = (float)(P->opening + j + 1) * P->slab;
             bad += vs_fp_depth(&fp, k1 - z) - vs_fp_depth(&fp, k0 - z) != o->D[j][i];
         }
+        if (P->colw) {
+            float cw[VS_VOXEL1_MAX + 8], rw[VS_VOXEL1_MAX];
+            vs_block_factors_ch(&g, &pl, 1, 0, P->ny, 0, P->bx / 8, cw, rw);
+            bad += memcmp(cw, o->cw[i], (size_t)P->bx * sizeof(float)) != 0 ||
+                   memcmp(rw, o->rw[i], (size_t)P->ny * sizeof(float)) != 0;
+            for (int k = 0; k < 8; k++) bad += o->cw[i][P->bx + k] != 0.0f;
+        }
     }
     return bad;
 }
@@ -594,6 +609,10 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
 {
     static place_fixture X;
     for (int i = 0; i < 258; i++) X.depth[i] = (float)i / 256.0f + 1e-3f * frand(); /* rising, uneven */
+    for (size_t i = 0; i < sizeof X.colw / sizeof *X.colw; i++) {
+        X.colw[i] = frand();
+        X.roww[i] = frand();
+    }
     float xyz[VS_PLACE_BATCH * PL_STRIDE + 4];
     int bad = 0, cases = 0;
     for (int trial = 0; trial < 400; trial++) {
@@ -632,6 +651,12 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
         P.depth = X.depth;
         P.nd = (int)ceilf(2.0f * P.rz / P.slab) + 1;
         P.opening = (int)(40.0f * frand());
+        if (trial % 2) { /* and the block's factors, 1..8 vectors wide, 1..64 rows */
+            P.colw = X.colw;
+            P.roww = X.roww;
+            P.bx = 8 * (1 + (int)((frand() + 1.0f) * 0.5f * 7.99f));
+            P.ny = 1 + (int)((frand() + 1.0f) * 0.5f * (VS_VOXEL1_MAX - 1));
+        }
         for (int i = 0; i < VS_PLACE_BATCH * PL_STRIDE + 4; i++) xyz[i] = 1e30f; /* guards between records */
         for (int i = 0; i < VS_PLACE_BATCH; i++) {
             float *c = xyz + i * PL_STRIDE;
@@ -650,7 +675,7 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
             const unsigned lo = fn(xyz, PL_STRIDE, n, &P, &oo);
             int same = lr == lo && lr >> n == 0;
             for (int i = 0; same && i < n; i++)
-                if (lr >> i & 1u) same = place_lane_same(&ro, &oo, i, P.nd);
+                if (lr >> i & 1u) same = place_lane_same(&ro, &oo, i, &P);
             if (truth) same &= place_truth(&X, &P, xyz, n, lr, &ro) == 0;
             cases++;
             if (!same) {
