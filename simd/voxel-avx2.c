@@ -12,9 +12,8 @@ void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t d
     const __m256 t = _mm256_set1_ps(thr);
     if (nvec == 1 && rows <= 8) {
         /* the common case, an 8-pixel footprint of at most 8 rows: its rows
-         * are built once into registers, then each sheet takes them with its
-         * weight loaded once (a store into a sheet may alias w, so in the
-         * loop below the compiler reloads it after every store) */
+         * are built once into registers, then added sheet by sheet (rows
+         * outer, as below, measured 8 % slower in the frame here) */
         const __m256 c = _mm256_loadu_ps(cw);
         __m256 h[8];
         for (int r = 0; r < rows; r++) {
@@ -29,8 +28,6 @@ void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t d
         }
         return;
     }
-    __m256 ws[VS_MAX_SHEETS_VOXEL]; /* the weights, loaded once (see above) */
-    for (int s = 0; s < ns; s++) ws[s] = _mm256_set1_ps(w[s]);
     for (int r = 0; r < rows; r++) {
         const __m256 ry = _mm256_set1_ps(rw[r]);
         for (int v = 0; v < nvec; v++) {
@@ -38,7 +35,7 @@ void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t d
             h = _mm256_and_ps(h, _mm256_cmp_ps(h, t, _CMP_GT_OQ));
             for (int s = 0; s < ns; s++) {
                 float *d = dst[s] + r * ds + 8 * v;
-                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(ws[s], h)));
+                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(_mm256_set1_ps(w[s]), h)));
             }
         }
     }

@@ -15,10 +15,6 @@ void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t
     }
     const __m512 t = _mm512_set1_ps(thr);
     const __m256 t8 = _mm256_set1_ps(thr);
-    /* the weights, loaded once: a store into a sheet may alias w, so the
-     * compiler would reload w[s] after every store */
-    __m512 ws[VS_MAX_SHEETS_VOXEL];
-    for (int s = 0; s < ns; s++) ws[s] = _mm512_set1_ps(w[s]);
     for (int r = 0; r < rows; r++) {
         const __m512 ry = _mm512_set1_ps(rw[r]);
         int v = 0;
@@ -27,7 +23,7 @@ void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t
             h = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(h, t, _CMP_GT_OQ), h);
             for (int s = 0; s < ns; s++) {
                 float *d = dst[s] + r * ds + 8 * v;
-                _mm512_storeu_ps(d, _mm512_add_ps(_mm512_loadu_ps(d), _mm512_mul_ps(ws[s], h)));
+                _mm512_storeu_ps(d, _mm512_add_ps(_mm512_loadu_ps(d), _mm512_mul_ps(_mm512_set1_ps(w[s]), h)));
             }
         }
         if (v < nvec) {
@@ -35,7 +31,7 @@ void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t
             h = _mm256_and_ps(h, _mm256_cmp_ps(h, t8, _CMP_GT_OQ));
             for (int s = 0; s < ns; s++) {
                 float *d = dst[s] + r * ds + 8 * v;
-                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(_mm512_castps512_ps256(ws[s]), h)));
+                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(_mm256_set1_ps(w[s]), h)));
             }
         }
     }
