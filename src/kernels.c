@@ -1,6 +1,7 @@
 /* Scalar reference kernels: the definition every SIMD kernel is tested
  * against (tests/test_simd.c). */
 #include "kernels.h"
+#include "footprint.h" /* vs_ifloor, vs_iceil */
 
 #include <float.h>
 #include <math.h>
@@ -210,18 +211,6 @@ void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
     }
 }
 
-/* floor and ceil as src/footprint.h's vs_ifloor, vs_iceil */
-static inline int ifloor(float v)
-{
-    const int i = (int)v;
-    return i - (v < (float)i);
-}
-static inline int iceil(float v)
-{
-    const int i = (int)v;
-    return i + (v > (float)i);
-}
-
 /* G(z) as src/footprint.h's vs_fp_depth */
 static inline float depth_at(const vs_place_in *P, float z)
 {
@@ -236,8 +225,8 @@ static inline float depth_at(const vs_place_in *P, float z)
 /* the tile pixels within pad of (x, y) all opaque, or none of them */
 static inline int occluded(const vs_place_in *P, float x, float y)
 {
-    int xa = ifloor(x - P->pad_x) - P->tx0, xb = iceil(x + P->pad_x) - P->tx0;
-    int ya = ifloor(y - P->pad_y) - P->ty0, yb = iceil(y + P->pad_y) - P->ty0;
+    int xa = vs_ifloor(x - P->pad_x) - P->tx0, xb = vs_iceil(x + P->pad_x) - P->tx0;
+    int ya = vs_ifloor(y - P->pad_y) - P->ty0, yb = vs_iceil(y + P->pad_y) - P->ty0;
     if (xa < 0) xa = 0;
     if (ya < 0) ya = 0;
     if (xb > P->tw - 1) xb = P->tw - 1;
@@ -252,7 +241,7 @@ static inline int occluded(const vs_place_in *P, float x, float y)
 /* a block's first pixel and phase along one axis (vs_block_place_at) */
 static inline void place_axis(float c, float r0, float phases, int *p, int *q, float *f)
 {
-    const float l = c - r0, a = (float)iceil(l), s = (a - l) * phases;
+    const float l = c - r0, a = (float)vs_iceil(l), s = (a - l) * phases;
     *p = (int)a;
     *q = (int)s;
     if (*q > (int)phases - 1) *q = (int)phases - 1;
