@@ -10,6 +10,7 @@
 #include "finish.h"
 #include "splat.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1173,8 +1174,12 @@ void vs_tile_render(void *arg, int worker, int task)
                         if (!(a > 0.0f)) continue;
                         float *c = sb.g + 3 * o;
                         if (pl == VS_PIPELINE_PRE) {
-                            /* opacity-weighted colour / interpolated opacity */
+                            /* opacity-weighted colour / interpolated opacity; an
+                             * opacity so small that its inverse overflows (a
+                             * transfer function whose opacity rises over 1e39
+                             * units) shows nothing: colour 0, not inf * 0 = NaN */
                             float inv = 1.0f / a;
+                            if (!(inv <= FLT_MAX)) inv = 0.0f;
                             float cr = q[4 * b] * inv, cg = q[4 * b + 1] * inv, cb = q[4 * b + 2] * inv;
                             c[0] = cr > 1.0f ? 1.0f : cr;
                             c[1] = cg > 1.0f ? 1.0f : cg;
