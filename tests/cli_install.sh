@@ -8,6 +8,8 @@
 set -euo pipefail
 
 VSPLAT=${1:?usage: cli_install.sh PATH_TO_VSPLAT}
+# the module search is what this tests: a caller's override would hide it
+unset VSPLAT_OIIO_MODULE
 BUILD=$(cd "$(dirname "$VSPLAT")" && pwd)
 if [[ ! -f $BUILD/CMakeCache.txt ]]; then
     echo "SKIP: $BUILD is not a CMake build folder"
