@@ -299,6 +299,18 @@ static void test_invariance(void)
             printf("%-10s occlusion culling changes the image by at most %.2e\n", vs_pipeline_name(s.pipeline), md);
             CHECK(md <= 2.0 * (1.0 - s.occlusion_threshold) + 1e-6, "%s culling changed image by %g",
                   vs_pipeline_name(s.pipeline), md);
+            /* at threshold 1, all that culling, early termination and the
+             * shading spans leave out is work on pixels that take nothing
+             * more (accumulated opacity 1): the image is the same to the bit */
+            s.occlusion = 1;
+            s.occlusion_threshold = 1.0;
+            if (render(v, &s, &img, &st)) {
+                CHECK(tu_max_diff(&ref2, &img) == 0.0, "%s culling at threshold 1 changed the image by %g",
+                      vs_pipeline_name(s.pipeline), tu_max_diff(&ref2, &img));
+                CHECK(st.voxels_culled > 0, "%s: nothing culled at threshold 1 (the check shows nothing)",
+                      vs_pipeline_name(s.pipeline));
+                vs_image_free(&img);
+            }
             vs_image_free(&ref2);
         }
         vs_image_free(&ref);
@@ -350,6 +362,64 @@ static void test_shading_table_cache(void)
     }
     for (int i = 0; i < 4; i++) vs_image_free(&fresh[i]);
     vs_volume_release(v);
+}
+
+/* Whatever a context keeps between frames (pool, relevant voxels, tables),
+ * a context that first rendered other scenes, pipelines (1 and 4
+ * channels), tile sizes and thread counts must give, for each render, the
+ * image of a fresh context. */
+static void test_context_reuse(void)
+{
+    const char *scenes[] = {"cube", "sphere", "ml"};
+    vs_volume *v[3];
+    for (int i = 0; i < 3; i++)
+        if (vs_volume_scene(ctx, scenes[i], &v[i]) != VS_OK) {
+            CHECK(0, "%s scene: %s", scenes[i], vs_last_error(ctx));
+            for (int j = 0; j < i; j++) vs_volume_release(v[j]);
+            return;
+        }
+    struct {
+        int vol;
+        vs_pipeline pl;
+        int size, tile;
+    } seq[] = {{0, VS_PIPELINE_POST_ALPHA, 96, 32}, {1, VS_PIPELINE_POST_CD, 64, 16},
+               {2, VS_PIPELINE_POST_GS, 80, 24},   {1, VS_PIPELINE_PRE, 64, 16},
+               {0, VS_PIPELINE_POST_CD, 96, 48},   {2, VS_PIPELINE_POST_CD, 80, 24}};
+    vs_context *seq_ctx;
+    if (vs_context_create(&seq_ctx) != VS_OK) {
+        CHECK(0, "context");
+        return;
+    }
+    for (size_t n = 0; n < sizeof seq / sizeof *seq; n++) {
+        vs_settings s;
+        vs_settings_init(&s);
+        s.pipeline = seq[n].pl;
+        s.width = s.height = seq[n].size;
+        s.tile_size = seq[n].tile;
+        s.azimuth = 20.0 + 15.0 * (double)n;
+        s.elevation = 15.0;
+        s.threads = 1 + (int)(n % 2);
+        vs_image a, b;
+        vs_context *c;
+        if (vs_context_create(&c) != VS_OK) continue;
+        int ok = vs_render(c, v[seq[n].vol], &s, &a, NULL) == VS_OK;
+        vs_context_release(c);
+        if (!ok) {
+            CHECK(0, "render %zu", n);
+            continue;
+        }
+        if (vs_render(seq_ctx, v[seq[n].vol], &s, &b, NULL) != VS_OK) {
+            CHECK(0, "render %zu: %s", n, vs_last_error(seq_ctx));
+            vs_image_free(&a);
+            continue;
+        }
+        CHECK(tu_max_diff(&a, &b) == 0.0, "render %zu (%s, %s) after others differs from a fresh context by %g", n,
+              scenes[seq[n].vol], vs_pipeline_name(s.pipeline), tu_max_diff(&a, &b));
+        vs_image_free(&a);
+        vs_image_free(&b);
+    }
+    vs_context_release(seq_ctx);
+    for (int i = 0; i < 3; i++) vs_volume_release(v[i]);
 }
 
 /* Post-shaded splatting against the analytic ray caster on the sphere. */
@@ -628,6 +698,7 @@ int main(void)
     test_cube_edges();
     test_invariance();
     test_shading_table_cache();
+    test_context_reuse();
     test_skewed_blocks();
     test_skewed_tables();
     /* the sphere against its analytic definition */
