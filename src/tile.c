@@ -26,6 +26,13 @@ static inline void rect_clear(rect *r)
 }
 static inline int rect_empty(const rect *r) { return r->x0 >= r->x1 || r->y0 >= r->y1; }
 
+/* Pixels of a sheet to shade: buffer rows [y0, y1), in row y the columns
+ * [xa[y], xb[y]) (buffer coordinates; empty when xa[y] == xb[y]). */
+typedef struct spans {
+    int y0, y1;
+    int *xa, *xb; /* indexed by buffer row */
+} spans;
+
 /* The geometry every rasterizer shares: where one kernel section lands. */
 typedef struct section {
     float cx, cy;   /* centre in image coordinates (after the depth shift);
@@ -894,14 +901,14 @@ static inline void shade_gradient(const vs_frame *F, float gx, float gy, float g
 /* With a transfer function that makes value 0 visible, sheet pixels whose
  * slab centre lies outside the volume (where nothing was splatted, so q = 0)
  * must stay transparent, as they are for the ray caster. */
-static void clip_outside(const tile_ctx *t, int k, const rect *r, float *alpha)
+static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
 {
     const vs_frame *F = t->F;
     const vs_camera *cam = &F->cam;
     const double z = (k + 0.5) * F->fp.slab;
     const double lim[3] = {F->rel->dims[0] - 0.5, F->rel->dims[1] - 0.5, F->rel->dims[2] - 0.5};
     for (int y = r->y0; y < r->y1; y++)
-        for (int x = r->x0; x < r->x1; x++) {
+        for (int x = r->xa[y]; x < r->xb[y]; x++) {
             double v[3] = {x + t->ox, y + t->oy, z}, idx[3];
             vs_camera_view_to_index(cam, v, idx);
             int inside = idx[0] >= -0.5 && idx[0] <= lim[0] && idx[1] >= -0.5 && idx[1] <= lim[1] &&
@@ -917,14 +924,14 @@ static void clip_outside(const tile_ctx *t, int k, const rect *r, float *alpha)
  * centre (f the focal length in pixels), dF/dZ at a fixed pixel is
  * Fx u/f + Fy v/f + Fz; solved for Fz.  Units out as in the orthographic
  * case: x, y per depth-0 pixel, z per view unit. */
-static void perspective_gradients(const tile_ctx *t, int k, const rect *r, const float *alpha, float *g)
+static void perspective_gradients(const tile_ctx *t, int k, const spans *r, const float *alpha, float *g)
 {
     const vs_camera *cam = &t->F->cam;
     const float sk = (float)vs_camera_sheet_scale(cam, k, t->F->fp.slab);
     const float cz = (float)(cam->px_per_mm / (cam->focal_px * cam->z_per_mm));
     for (int y = r->y0; y < r->y1; y++) {
         const float v = (float)((y + t->oy) - cam->cy);
-        for (int x = r->x0; x < r->x1; x++) {
+        for (int x = r->xa[y]; x < r->xb[y]; x++) {
             int o = (y - 1) * t->tw + (x - 1);
             if (!(alpha[o] > 0.0f)) continue;
             const float u = (float)((x + t->ox) - cam->cx);
@@ -939,11 +946,11 @@ static void perspective_gradients(const tile_ctx *t, int k, const rect *r, const
 /* Perspective: a slab is crossed by the pixel's ray over its thickness
  * times the ray's length per unit depth, so its opacity grows to
  * 1 - (1 - a)^len (the ray caster steps the same way). */
-static void perspective_opacity(const tile_ctx *t, const rect *r, float *alpha)
+static void perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
 {
     const vs_camera *cam = &t->F->cam;
     for (int y = r->y0; y < r->y1; y++)
-        for (int x = r->x0; x < r->x1; x++) {
+        for (int x = r->xa[y]; x < r->xb[y]; x++) {
             float *a = alpha + (y - 1) * t->tw + (x - 1);
             if (!(*a > 0.0f && *a < 1.0f)) continue;
             const float len = (float)vs_camera_ray_length(cam, x + t->ox, y + t->oy);
@@ -956,14 +963,44 @@ static void perspective_opacity(const tile_ctx *t, const rect *r, float *alpha)
  * shading: behind the head's skin, four in five visible pixels of a
  * shaded span are such.  Clearing their opacity skips them in shading and
  * compositing and leaves the image bit-identical. */
-static void skip_opaque(const tile_ctx *t, const rect *r, const float *acc, float *alpha)
+static void skip_opaque(const tile_ctx *t, const spans *r, const float *acc, float *alpha)
 {
     for (int y = r->y0; y < r->y1; y++) {
-        const int o = (y - 1) * t->tw + (r->x0 - 1);
+        const int o = (y - 1) * t->tw + (r->xa[y] - 1);
         const float *a = acc + 4 * o + 3;
         float *al = alpha + o;
-        for (int i = 0; i < r->x1 - r->x0; i++) al[i] = a[4 * i] >= 1.0f ? 0.0f : al[i]; /* a select: vectorises */
+        const int n = r->xb[y] - r->xa[y];
+        for (int i = 0; i < n; i++) al[i] = a[4 * i] >= 1.0f ? 0.0f : al[i]; /* a select: vectorises */
     }
+}
+
+/* The part of the touched rectangle r that is classified, shaded and
+ * composited: in each row, the columns between the first and last pixel
+ * not yet fully opaque (live).  Opaque runs at a row's ends are common
+ * behind a surface; skip_opaque still drops those inside the span. */
+static void shaded_spans(const rect *r, const int *live0, const int *live1, spans *sp)
+{
+    sp->y0 = r->y0;
+    sp->y1 = r->y1;
+    for (int y = r->y0; y < r->y1; y++) {
+        const int a = live0[y - 1] + 1, b = live1[y - 1] + 1; /* own pixel x is buffer pixel x + 1 */
+        sp->xa[y] = a > r->x0 ? a : r->x0;
+        sp->xb[y] = b < r->x1 ? b : r->x1;
+        if (sp->xb[y] < sp->xa[y]) sp->xb[y] = sp->xa[y];
+    }
+}
+
+/* After compositing: the live columns of own row y shrink past pixels
+ * whose accumulated opacity reached 1 (a scan from each end, so each pixel
+ * is passed once per tile). */
+static void shrink_live(const tile_ctx *t, const float *acc, int y, int *live0, int *live1)
+{
+    const float *a = acc + 4 * (size_t)y * t->tw + 3;
+    int x0 = live0[y], x1 = live1[y];
+    while (x0 < x1 && a[4 * x0] >= 1.0f) x0++;
+    while (x1 > x0 && a[4 * (x1 - 1)] >= 1.0f) x1--;
+    live0[y] = x0;
+    live1[y] = x1;
 }
 
 void vs_tile_render(void *arg, int worker, int task)
@@ -1020,6 +1057,11 @@ void vs_tile_render(void *arg, int worker, int task)
     shade_buf sb = {malloc((size_t)npix * sizeof(float)), calloc((size_t)npix * 3 + 1, sizeof(float))};
     int *bucket = NULL;
     int *sat = calloc((size_t)(t.tw + 1) * (t.th + 1), sizeof(int));
+    /* per own row, the columns [live0, live1) not yet fully opaque; per
+     * buffer row, a sheet's shaded span */
+    int *live0 = malloc((size_t)(2 * t.th + 2 * t.bh) * sizeof(int));
+    int *live1 = live0 ? live0 + t.th : NULL;
+    int *span_xa = live0 ? live0 + 2 * t.th : NULL, *span_xb = live0 ? span_xa + t.bh : NULL;
     float *sheets = NULL;
     float **ring = NULL;
     rect *bbox = NULL;
@@ -1031,9 +1073,13 @@ void vs_tile_render(void *arg, int worker, int task)
     ts.sat = sat;
     ts.opaque = &opaque;
     ts.ws = ws;
-    if (!t.ex || !t.rxa || !t.rey || !sat || !acc || !kfb || !order || !sb.alpha || !sb.g) {
+    if (!t.ex || !t.rxa || !t.rey || !sat || !live0 || !acc || !kfb || !order || !sb.alpha || !sb.g) {
         atomic_store(&F->error, 1);
         goto done;
+    }
+    for (int y = 0; y < t.th; y++) {
+        live0[y] = 0;
+        live1[y] = t.tw;
     }
 
     /* the sheets each brick spans, and a counting sort by its first */
@@ -1118,6 +1164,8 @@ void vs_tile_render(void *arg, int worker, int task)
         if (!rect_empty(&r)) {
             ws->tiles_shaded++;
             const float *q = buf[cur];
+            spans sp = {.xa = span_xa, .xb = span_xb};
+            shaded_spans(&r, live0, live1, &sp);
             /* 1. classification + gradients */
             double t0 = vs_now_ms();
             /* the tables the post-shaded kernels read (a few stores a sheet) */
@@ -1128,21 +1176,23 @@ void vs_tile_render(void *arg, int worker, int task)
                                         .phi_bin = F->lut.phi_bin, .diffuse = F->lut.diffuse,
                                         .specular = F->lut.specular};
             if (pl == VS_PIPELINE_POST_CD) {
-                for (int y = r.y0; y < r.y1; y++) {
-                    int o = (y - 1) * t.tw + (r.x0 - 1);
-                    size_t b = (size_t)y * t.stride + r.x0;
+                for (int y = sp.y0; y < sp.y1; y++) {
+                    if (sp.xa[y] == sp.xb[y]) continue;
+                    int o = (y - 1) * t.tw + (sp.xa[y] - 1);
+                    size_t b = (size_t)y * t.stride + sp.xa[y];
                     F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, q + b, buf[prev] + b, buf[nxt] + b, t.stride,
-                                        r.x1 - r.x0, &tabs);
+                                        sp.xb[y] - sp.xa[y], &tabs);
                 }
             } else if (pl == VS_PIPELINE_POST_GS) {
-                for (int y = r.y0; y < r.y1; y++) {
-                    int o = (y - 1) * t.tw + (r.x0 - 1);
-                    size_t b = (size_t)y * t.stride + r.x0;
-                    F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, q + 4 * b, r.x1 - r.x0, &tabs);
+                for (int y = sp.y0; y < sp.y1; y++) {
+                    if (sp.xa[y] == sp.xb[y]) continue;
+                    int o = (y - 1) * t.tw + (sp.xa[y] - 1);
+                    size_t b = (size_t)y * t.stride + sp.xa[y];
+                    F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, q + 4 * b, sp.xb[y] - sp.xa[y], &tabs);
                 }
             } else {
-                for (int y = r.y0; y < r.y1; y++)
-                    for (int x = r.x0; x < r.x1; x++) {
+                for (int y = sp.y0; y < sp.y1; y++)
+                    for (int x = sp.xa[y]; x < sp.xb[y]; x++) {
                         int o = (y - 1) * t.tw + (x - 1);
                         size_t b = (size_t)y * t.stride + x;
                         float a;
@@ -1154,20 +1204,21 @@ void vs_tile_render(void *arg, int worker, int task)
                         sb.alpha[o] = a;
                     }
             }
-            if (F->clip_to_volume) clip_outside(&t, k, &r, sb.alpha);
-            if (F->cam.persp && pl == VS_PIPELINE_POST_CD) perspective_gradients(&t, k, &r, sb.alpha, sb.g);
-            if (s->occlusion) skip_opaque(&t, &r, acc, sb.alpha);
+            if (F->clip_to_volume) clip_outside(&t, k, &sp, sb.alpha);
+            if (F->cam.persp && pl == VS_PIPELINE_POST_CD) perspective_gradients(&t, k, &sp, sb.alpha, sb.g);
+            if (s->occlusion) skip_opaque(&t, &sp, acc, sb.alpha);
             double t1 = vs_now_ms();
             /* 2. shading: colour per pixel */
             if ((pl == VS_PIPELINE_POST_CD || pl == VS_PIPELINE_POST_GS) && !s->exact_normals) {
-                for (int y = r.y0; y < r.y1; y++) {
-                    int o = (y - 1) * t.tw + (r.x0 - 1);
-                    size_t b = (size_t)y * t.stride + r.x0;
-                    F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, q + ch * b, ch, r.x1 - r.x0, &tabs);
+                for (int y = sp.y0; y < sp.y1; y++) {
+                    if (sp.xa[y] == sp.xb[y]) continue;
+                    int o = (y - 1) * t.tw + (sp.xa[y] - 1);
+                    size_t b = (size_t)y * t.stride + sp.xa[y];
+                    F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, q + ch * b, ch, sp.xb[y] - sp.xa[y], &tabs);
                 }
             } else {
-                for (int y = r.y0; y < r.y1; y++)
-                    for (int x = r.x0; x < r.x1; x++) {
+                for (int y = sp.y0; y < sp.y1; y++)
+                    for (int x = sp.xa[y]; x < sp.xb[y]; x++) {
                         int o = (y - 1) * t.tw + (x - 1);
                         size_t b = (size_t)y * t.stride + x;
                         float a = sb.alpha[o];
@@ -1191,22 +1242,24 @@ void vs_tile_render(void *arg, int worker, int task)
                                 c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
                             }
                         } else {
-                            float d, sp, rgb[3];
-                            shade_gradient(F, c[0], c[1], c[2], &d, &sp);
+                            float d, spec, rgb[3];
+                            shade_gradient(F, c[0], c[1], c[2], &d, &spec);
                             lookup_color(F, pl == VS_PIPELINE_POST_CD ? q[b] : q[4 * b], rgb);
-                            c[0] = rgb[0] * d + sp;
-                            c[1] = rgb[1] * d + sp;
-                            c[2] = rgb[2] * d + sp;
+                            c[0] = rgb[0] * d + spec;
+                            c[1] = rgb[1] * d + spec;
+                            c[2] = rgb[2] * d + spec;
                         }
                     }
             }
-            if (F->cam.persp) perspective_opacity(&t, &r, sb.alpha);
+            if (F->cam.persp) perspective_opacity(&t, &sp, sb.alpha);
             double t2 = vs_now_ms();
             /* 3. front-to-back compositing; the accumulated opacity is the
              * tile's occlusion map */
-            for (int y = r.y0; y < r.y1; y++) {
-                int o = (y - 1) * t.tw + (r.x0 - 1);
-                opaque += F->kern.composite(acc + 4 * o, sb.alpha + o, sb.g + 3 * o, r.x1 - r.x0, thr);
+            for (int y = sp.y0; y < sp.y1; y++) {
+                if (sp.xa[y] == sp.xb[y]) continue;
+                int o = (y - 1) * t.tw + (sp.xa[y] - 1);
+                opaque += F->kern.composite(acc + 4 * o, sb.alpha + o, sb.g + 3 * o, sp.xb[y] - sp.xa[y], thr);
+                if (s->occlusion) shrink_live(&t, acc, y - 1, live0, live1);
             }
             if (s->occlusion && opaque != opaque_in_sat) {
                 build_sat(&t, acc, thr, sat);
@@ -1247,6 +1300,7 @@ done:
     free(sb.g);
     free(bucket);
     free(sat);
+    free(live0);
     free(t.ex);
     free(t.rxa);
     free(t.rey);
