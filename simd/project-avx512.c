@@ -1,6 +1,6 @@
 /* Voxel transform and binning, AVX-512: sixteen voxels a step, multiply
  * then add in the scalar reference's order (src/kernels.c; no FMA,
- * src/kernels.h); the kept lanes are packed with compress stores and the
+ * src/kernels.h); the kept lanes are packed by register compresses and the
  * positions interleaved into x, y, z triples through a small buffer. */
 #include "kernels.h"
 
@@ -39,7 +39,10 @@ int vs_project_brick_avx512(const uint16_t *vox, int n, const vs_project_in *P, 
         if (!k) continue;
         const int cnt = __builtin_popcount((unsigned)k);
         float t[3][16];
-        for (int r = 0; r < 3; r++) _mm512_mask_compressstoreu_ps(t[r], k, c[r]);
+        /* compress in a register, then a plain store: a compress *store*
+         * is microcoded on AMD Zen 4 (this kernel ran at 1.2x scalar there,
+         * against 3x for AVX2) */
+        for (int r = 0; r < 3; r++) _mm512_storeu_ps(t[r], _mm512_maskz_compress_ps(k, c[r]));
         _mm256_mask_storeu_epi16(keep + q, (__mmask16)((1u << cnt) - 1u),
                                  _mm512_cvtepi32_epi16(_mm512_maskz_compress_epi32(
                                      k, _mm512_add_epi32(lane, _mm512_set1_epi32(i)))));
