@@ -39,6 +39,13 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
             Q[r][c] = fp->a * q;
         }
     double A = Q[0][0], B = Q[0][1], C = Q[1][1];
+    /* A cross term at rounding level is 0: it comes from an axis of the
+     * grid that lies in the image plane, seen through a rotation whose sines
+     * and cosines are not exact (the CT head turned about its anisotropic
+     * axis gives |B| ~ 1e-17..1e-33).  Kept, it would shift each footprint
+     * row by that many pixels and send every section of the view down the
+     * skewed-block path instead of the row-times-column one. */
+    if (fabs(B) <= 1e-12 * (A + C)) B = 0.0;
     double det = A * C - B * B;
     /* s = -Qxx^-1 Qxz */
     double sx = -(C * Q[0][2] - B * Q[1][2]) / det;
@@ -54,7 +61,7 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
     fp->sheared = fabs(sx) > 1e-9 || fabs(sy) > 1e-9;
     /* Isotropic voxels (any view) and anisotropic ones seen along an axis:
      * the footprint is an outer product of a row and a column of weights */
-    fp->separable = !fp->sheared && fabs(B) <= 1e-12 * (A + C);
+    fp->separable = !fp->sheared && B == 0.0;
     fp->Qzx = Q[2][0];
     fp->Qzy = Q[2][1];
     fp->rz = sqrt(fp->emax / fp->kappa);

@@ -422,6 +422,49 @@ static void test_context_reuse(void)
     for (int i = 0; i < 3; i++) vs_volume_release(v[i]);
 }
 
+/* A grid with equal x and y spacing turned about z (the CT head, 0.96 x
+ * 0.96 x 1.5 mm) projects to an axis-aligned ellipse in every view; only
+ * rounding in the rotation gives a cross term (1e-17..1e-33).  It must be
+ * exactly 0, so such views take the row-times-column path, while a truly
+ * rotated ellipse keeps its cross term. */
+static void test_footprint_cross_term(void)
+{
+    const int dims[3] = {8, 8, 8};
+    const double ct[3] = {0.9570312, 0.9570312, 1.5}, skew[3] = {1.0, 1.8, 2.6};
+    const struct {
+        const double *spacing;
+        double az, el;
+        int rotated;
+    } cases[] = {{ct, 180, 10, 0},  {ct, 30, 30, 0},  {ct, 210, 10, 0},
+                 {ct, 95, -40, 0},  {skew, 30, 40, 1}, {skew, 70, -20, 1}};
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+        vs_volume *v;
+        if (vs_volume_create(ctx, VS_F32, dims, cases[c].spacing, &v) != VS_OK) {
+            CHECK(0, "volume: %s", vs_last_error(ctx));
+            return;
+        }
+        vs_settings s;
+        vs_settings_init(&s);
+        s.azimuth = cases[c].az;
+        s.elevation = cases[c].el;
+        vs_camera cam;
+        vs_footprint fp;
+        if (vs_camera_setup(ctx, v, &s, &cam) == VS_OK && vs_footprint_setup(ctx, &s, &cam, &fp) == VS_OK) {
+            if (cases[c].rotated)
+                CHECK(fabs(fp.B) > 1e-3 * (fp.A + fp.C) && fp.row_shift != 0.0f,
+                      "view %g,%g: a rotated ellipse lost its cross term (B = %g)", cases[c].az, cases[c].el, fp.B);
+            else
+                CHECK(fp.B == 0.0f && fp.row_shift == 0.0f && fp.sheared,
+                      "view %g,%g of the CT grid: cross term B = %g, row shift %g (want exactly 0, sheared)",
+                      cases[c].az, cases[c].el, fp.B, fp.row_shift);
+            vs_footprint_free(&fp);
+        } else {
+            CHECK(0, "footprint: %s", vs_last_error(ctx));
+        }
+        vs_volume_release(v);
+    }
+}
+
 /* Post-shaded splatting against the analytic ray caster on the sphere. */
 static double psnr_rgb(const vs_image *a, const vs_image *b)
 {
@@ -700,6 +743,7 @@ int main(void)
     test_shading_table_cache();
     test_context_reuse();
     test_skewed_blocks();
+    test_footprint_cross_term();
     test_skewed_tables();
     /* the sphere against its analytic definition */
     test_against_raycaster("sphere", 1, 256, 0.0, 30.0);
