@@ -265,6 +265,17 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
             F.skew_maxvec = vs_block_skewed_nvec(&F.skew, F.fp.row_shift,
                                                  s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4);
             F.skew_maxrows = F.skew.ny;
+            /* an axis-aligned ellipse whose centre only moves with depth
+             * (anisotropic voxels turned about their odd axis, the CT head's
+             * case): voxel at a time too, one occlusion test a voxel and
+             * each section added to its sheet of the ring at once, instead
+             * of an active list walked and tested sheet by sheet (CT head,
+             * 2 threads: post-cd 179 -> 168 ms, post-alpha 272 -> 256 ms,
+             * pre the same; post-gs, whose sections each build a block, lost
+             * more to the coarser culling than it saved: 418 -> 430 ms) */
+            F.sheared_blocks = F.use_skewed && F.fp.sheared && F.fp.B == 0.0f && vspan <= VS_MAX_VSPAN &&
+                               s->pipeline != VS_PIPELINE_POST_GS;
+            F.use_blocks = F.sheared_blocks;
         }
     }
     if (!s->exact_normals) {

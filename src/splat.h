@@ -26,8 +26,13 @@ typedef struct vs_frame {
     vs_classify *cls;
     vs_light light;
     vs_footprint fp;
-    int use_blocks;                  /* separable footprints: voxel at a time with
-                                        footprint blocks (src/block.h)           */
+    int use_blocks;                  /* voxel at a time: separable footprints with
+                                        footprint blocks (src/block.h), or
+                                        sheared_blocks                           */
+    int sheared_blocks;              /* voxel at a time, an axis-aligned footprint
+                                        whose centre moves with depth: a section
+                                        per sheet from the skewed tables (blk
+                                        unused)                                  */
     vs_block_geom blk;
     int use_skewed;                  /* general footprints: one block per
                                         section from skewed tables            */

@@ -701,8 +701,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
 {
     const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
-    const vs_block_geom *g = &F->blk;
-    const int ch = g->ch, ppv = 8 / ch, bs = 8 * g->nvec;
+    const vs_block_geom *g = F->sheared_blocks ? &F->skew : &F->blk;
+    const int ch = F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, ppv = 8 / ch, bs = 8 * g->nvec;
     const vs_pipeline pl = F->pipeline;
     const float A = F->fp.A, rk = F->fp.row_k;
     /* ring slots of the sheets from `opening` on: every voxel of this
@@ -725,7 +725,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                            .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
                            /* the voxel kernels' factors, for blocks they take whole */
-                           .colw = pl != VS_PIPELINE_POST_GS && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX
+                           .colw = !F->sheared_blocks && pl != VS_PIPELINE_POST_GS && g->bx <= VS_VOXEL1_MAX &&
+                                           g->ny <= VS_VOXEL1_MAX
                                        ? g->colw
                                        : NULL,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
@@ -741,6 +742,22 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             const int lane = __builtin_ctz(live);
             const pend *e = &bk->p[i0 + lane];
             const int kl = e->kl < opening + P.nd - 1 ? e->kl : opening + P.nd - 1;
+            if (F->sheared_blocks) {
+                /* each section at its own centre (the kernel's centroid in
+                 * its slab), placed and added as on the sheet-at-a-time
+                 * path, into its sheet of the ring */
+                float w4[4];
+                voxel_weights(F, e->v, w4);
+                const sheet_geom sh = {g, 1.0f, 1.0f};
+                for (int k = opening; k <= kl; k++) {
+                    section sec;
+                    if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
+                    ts->ws->splatted++;
+                    const int slot = slots[k - opening];
+                    raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot]);
+                }
+                continue;
+            }
             /* rows [j0, j1) and vectors [v0, v1) of the block inside the buffer */
             const int by = pv.by[lane], bx = pv.bx[lane];
             const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
@@ -1039,8 +1056,8 @@ void vs_tile_render(void *arg, int worker, int task)
     t.rey = malloc((size_t)t.bh * 2 * sizeof(float));
     t.rdy = t.rey ? t.rey + t.bh : NULL;
     t.stride = t.bw + 2 * VS_APRON;
-    t.blk = F->use_blocks    ? malloc((size_t)F->blk.ny * 8 * F->blk.nvec * sizeof(float))
-            : F->use_skewed ? malloc((size_t)F->skew_maxrows * 8 * F->skew_maxvec * sizeof(float))
+    t.blk = F->use_skewed   ? malloc((size_t)F->skew_maxrows * 8 * F->skew_maxvec * sizeof(float))
+            : F->use_blocks ? malloc((size_t)F->blk.ny * 8 * F->blk.nvec * sizeof(float))
                             : NULL;
     const int npix = t.tw * t.th;
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
