@@ -233,37 +233,83 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
  * weight, like a separable one: the fused voxel kernels build its rows in
  * registers and add them, with the products and threshold of
  * vs_block_build_skewed's uniform case, so the sheet gets the same floats
- * as from the block.  0 when the block is too wide for them. */
-static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb)
+ * as from the block.  The columns (placement, the vectors inside the
+ * buffer, their factors) and the rows are set apart, so that the sections
+ * of a voxel whose centre moves only down the image share the columns. */
+typedef struct unskewed_cols {
+    float cx;   /* the centre they were placed for */
+    int bx;     /* buffer column of block pixel 0 */
+    int v0, v1; /* the block's vectors inside the buffer (none: v0 >= v1) */
+    float cw[VS_VOXEL1_MAX + 8];
+} unskewed_cols;
+
+/* 0 when the block is too wide for the fused kernels. */
+static int unskewed_place_cols(const tile_ctx *t, const vs_block_geom *g, const vs_block_place *p, int ch,
+                               unskewed_cols *uc)
 {
-    const vs_frame *F = t->F;
-    const vs_block_geom *g = sec->g;
     const int ppv = 8 / ch, nvec = (g->nx * ch + 7) / 8;
-    vs_block_place p;
-    vs_block_place_at(g, sec->cx, sec->cy, &p);
-    const int by = p.y - t->oy, bx = p.x - t->ox;
-    const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
-    const int v0 = bx < 0 ? -bx / ppv : 0;
-    int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
-    if (v1 > nvec) v1 = nvec;
-    if (j0 >= j1 || v0 >= v1) return 1;
-    if ((v1 - v0) * ppv > VS_VOXEL1_MAX) return 0;
-    const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
-    float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
-    float cw[VS_VOXEL1_MAX + 8], rw[VS_BLOCK_MAX_SPAN], w[4];
-    vs_block_factors_ch(g, &p, ch, j0, j1, v0, v1, cw, rw);
+    const int bx = p->x - t->ox;
+    uc->bx = bx;
+    uc->v0 = bx < 0 ? -bx / ppv : 0;
+    uc->v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+    if (uc->v1 > nvec) uc->v1 = nvec;
+    if (uc->v0 >= uc->v1) return 1;
+    if ((uc->v1 - uc->v0) * ppv > VS_VOXEL1_MAX) return 0;
+    const int i0 = uc->v0 * ppv, n = (uc->v1 - uc->v0) * ppv;
+    const float *c0 = g->colw + (size_t)p->qx * g->bx + i0, *c1 = c0 + g->bx;
+    for (int i = 0; i < n; i++) uc->cw[i] = c0[i] + p->fx * (c1[i] - c0[i]); /* vs_block_factors_ch's lerp */
     /* splat_voxel4 reads cw up to a multiple of 8 floats: defined zeros
      * past the factors (not the whole array: this runs per section) */
-    if (ch == 4) memset(cw + 2 * (v1 - v0), 0, 8 * sizeof(float));
+    if (ch == 4) memset(uc->cw + n, 0, 8 * sizeof(float));
+    return 1;
+}
+
+static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const vs_block_place *p,
+                                const unskewed_cols *uc, float D, const float w4[4], int ch, float *dst, rect *bb)
+{
+    const vs_frame *F = t->F;
+    const int ppv = 8 / ch, v0 = uc->v0, v1 = uc->v1, bx = uc->bx;
+    const int by = p->y - t->oy;
+    const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+    if (j0 >= j1 || v0 >= v1) return;
+    const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
+    float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+    float rw[VS_BLOCK_MAX_SPAN], w[4];
+    const float *r0 = g->roww + (size_t)p->qy * g->ny + j0, *r1 = r0 + g->ny;
+    for (int j = 0; j < j1 - j0; j++) rw[j] = r0[j] + p->fy * (r1[j] - r0[j]);
     if (ch == 1) {
-        w[0] = w4[0] * sec->D;
-        F->kern.splat_voxel1(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+        w[0] = w4[0] * D;
+        F->kern.splat_voxel1(&d, w, 1, ds, uc->cw, rw, j1 - j0, v1 - v0, g->thr);
     } else {
-        for (int c = 0; c < 4; c++) w[c] = w4[c] * sec->D;
-        F->kern.splat_voxel4(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+        for (int c = 0; c < 4; c++) w[c] = w4[c] * D;
+        F->kern.splat_voxel4(&d, w, 1, ds, uc->cw, rw, j1 - j0, v1 - v0, g->thr);
     }
     const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
     merge_box(bb, &box);
+}
+
+/* One section through the fused kernels; 0 when the block is too wide for
+ * them.  uc: the columns of an earlier section of the same voxel, reused
+ * when its centre has the same x (else placed anew), or NULL. */
+static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb,
+                           unskewed_cols *uc)
+{
+    const vs_block_geom *g = sec->g;
+    unskewed_cols own;
+    vs_block_place p;
+    vs_block_place_at(g, sec->cx, sec->cy, &p);
+    if (!uc) {
+        uc = &own;
+        uc->cx = NAN;
+    }
+    if (!(uc->cx == sec->cx)) {
+        if (!unskewed_place_cols(t, g, &p, ch, uc)) {
+            uc->cx = NAN;
+            return 0;
+        }
+        uc->cx = sec->cx;
+    }
+    unskewed_splat_rows(t, g, &p, uc, sec->D, w4, ch, dst, bb);
     return 1;
 }
 
@@ -273,12 +319,13 @@ static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4
  * density and gradient splats by splat_block_mix.  Only the rows inside the
  * buffer and the vectors overlapping it are added; a vector may spill into
  * the apron. */
-static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb)
+static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb,
+                          unskewed_cols *uc)
 {
     const vs_frame *F = t->F;
     const vs_block_geom *g = sec->g;
     const int ppv = 8 / ch, bs = 8 * F->skew_maxvec, gs = F->pipeline == VS_PIPELINE_POST_GS;
-    if (!gs && t->fp->row_shift == 0.0f && raster_unskewed(t, sec, w4, ch, dst, bb)) return;
+    if (!gs && t->fp->row_shift == 0.0f && raster_unskewed(t, sec, w4, ch, dst, bb, uc)) return;
     int x, y, nvec;
     vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, gs, F->skew_maxvec, t->blk, &x, &y, &nvec);
     const int by = y - t->oy, bx = x - t->ox;
@@ -656,7 +703,7 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
         if (sec.g) {
-            raster_skewed(t, &sec, e->w, F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, dst, bb);
+            raster_skewed(t, &sec, e->w, F->pipeline == VS_PIPELINE_POST_CD ? 1 : 4, dst, bb, NULL);
             continue;
         }
         switch (F->pipeline) {
@@ -749,12 +796,13 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 float w4[4];
                 voxel_weights(F, e->v, w4);
                 const sheet_geom sh = {g, 1.0f, 1.0f};
+                unskewed_cols uc = {.cx = NAN}; /* shared by its sections when only y moves */
                 for (int k = opening; k <= kl; k++) {
                     section sec;
                     if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
                     ts->ws->splatted++;
                     const int slot = slots[k - opening];
-                    raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot]);
+                    raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot], &uc);
                 }
                 continue;
             }
