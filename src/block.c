@@ -193,13 +193,23 @@ void vs_block_factors(const vs_block_geom *g, const vs_block_place *p, int j0, i
     vs_block_factors_ch(g, p, g->ch, j0, j1, v0, v1, cw, rw);
 }
 
+void vs_block_col_factors(const vs_block_geom *g, const vs_block_place *p, int i0, int i1, float *cw)
+{
+    const float *c0 = g->colw + (size_t)p->qx * g->bx + i0;
+    lerp(cw, c0, c0 + g->bx, p->fx, 0, i1 - i0);
+}
+
+void vs_block_row_factors(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, float *rw)
+{
+    const float *r0 = g->roww + (size_t)p->qy * g->ny + j0;
+    lerp(rw, r0, r0 + g->ny, p->fy, 0, j1 - j0);
+}
+
 void vs_block_factors_ch(const vs_block_geom *g, const vs_block_place *p, int ch, int j0, int j1, int v0, int v1,
                          float *cw, float *rw)
 {
-    const int i0 = v0 * 8 / ch, i1 = v1 * 8 / ch;
-    const float *c0 = g->colw + (size_t)p->qx * g->bx + i0, *r0 = g->roww + (size_t)p->qy * g->ny + j0;
-    lerp(cw, c0, c0 + g->bx, p->fx, 0, i1 - i0);
-    lerp(rw, r0, r0 + g->ny, p->fy, 0, j1 - j0);
+    vs_block_col_factors(g, p, v0 * 8 / ch, v1 * 8 / ch, cw);
+    vs_block_row_factors(g, p, j0, j1, rw);
 }
 
 void vs_block_build(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *blk)

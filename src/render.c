@@ -241,7 +241,8 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     }
     if ((rc = vs_footprint_setup(ctx, s, &F.cam, &F.fp)) != VS_OK) goto fail;
     {
-        /* separable footprints go voxel at a time with footprint blocks,
+        /* separable footprints go voxel at a time with footprint blocks
+         * (and sheared axis-aligned ones with a section per sheet, below),
          * when a ring of sheets holds every sheet one kernel reaches and a
          * block stays small (else the general sheet-at-a-time path, which
          * also serves perspective, where a footprint's size varies with

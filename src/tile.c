@@ -237,7 +237,8 @@ static void raster4(const tile_ctx *t, const section *sec, const float w4[4], fl
  * buffer, their factors) and the rows are set apart, so that the sections
  * of a voxel whose centre moves only down the image share the columns. */
 typedef struct unskewed_cols {
-    float cx;   /* the centre they were placed for */
+    const vs_block_geom *g; /* the tables and centre they were placed for */
+    float cx;
     int bx;     /* buffer column of block pixel 0 */
     int v0, v1; /* the block's vectors inside the buffer (none: v0 >= v1) */
     float cw[VS_VOXEL1_MAX + 8];
@@ -255,9 +256,8 @@ static int unskewed_place_cols(const tile_ctx *t, const vs_block_geom *g, const 
     if (uc->v1 > nvec) uc->v1 = nvec;
     if (uc->v0 >= uc->v1) return 1;
     if ((uc->v1 - uc->v0) * ppv > VS_VOXEL1_MAX) return 0;
-    const int i0 = uc->v0 * ppv, n = (uc->v1 - uc->v0) * ppv;
-    const float *c0 = g->colw + (size_t)p->qx * g->bx + i0, *c1 = c0 + g->bx;
-    for (int i = 0; i < n; i++) uc->cw[i] = c0[i] + p->fx * (c1[i] - c0[i]); /* vs_block_factors_ch's lerp */
+    const int n = (uc->v1 - uc->v0) * ppv;
+    vs_block_col_factors(g, p, uc->v0 * ppv, uc->v1 * ppv, uc->cw);
     /* splat_voxel4 reads cw up to a multiple of 8 floats: defined zeros
      * past the factors (not the whole array: this runs per section) */
     if (ch == 4) memset(uc->cw + n, 0, 8 * sizeof(float));
@@ -275,8 +275,7 @@ static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const
     const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
     float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
     float rw[VS_BLOCK_MAX_SPAN], w[4];
-    const float *r0 = g->roww + (size_t)p->qy * g->ny + j0, *r1 = r0 + g->ny;
-    for (int j = 0; j < j1 - j0; j++) rw[j] = r0[j] + p->fy * (r1[j] - r0[j]);
+    vs_block_row_factors(g, p, j0, j1, rw);
     if (ch == 1) {
         w[0] = w4[0] * D;
         F->kern.splat_voxel1(&d, w, 1, ds, uc->cw, rw, j1 - j0, v1 - v0, g->thr);
@@ -290,7 +289,7 @@ static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const
 
 /* One section through the fused kernels; 0 when the block is too wide for
  * them.  uc: the columns of an earlier section of the same voxel, reused
- * when its centre has the same x (else placed anew), or NULL. */
+ * when it had the same tables and centre x (else placed anew), or NULL. */
 static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb,
                            unskewed_cols *uc)
 {
@@ -298,15 +297,16 @@ static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4
     unskewed_cols own;
     vs_block_place p;
     vs_block_place_at(g, sec->cx, sec->cy, &p);
+    const int by = p.y - t->oy;
+    if (by >= t->bh || by + g->ny <= 0) return 1; /* no row inside the buffer */
     if (!uc) {
         uc = &own;
-        uc->cx = NAN;
+        uc->g = NULL;
     }
-    if (!(uc->cx == sec->cx)) {
-        if (!unskewed_place_cols(t, g, &p, ch, uc)) {
-            uc->cx = NAN;
-            return 0;
-        }
+    if (uc->g != g || !(uc->cx == sec->cx)) {
+        uc->g = NULL;
+        if (!unskewed_place_cols(t, g, &p, ch, uc)) return 0;
+        uc->g = g;
         uc->cx = sec->cx;
     }
     unskewed_splat_rows(t, g, &p, uc, sec->D, w4, ch, dst, bb);
@@ -318,7 +318,7 @@ static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4
  * weights (pre, post-alpha), or for post-gs (h, h dx, h dy, h) mixed into
  * density and gradient splats by splat_block_mix.  Only the rows inside the
  * buffer and the vectors overlapping it are added; a vector may spill into
- * the apron. */
+ * the apron.  uc: as for raster_unskewed (NULL: nothing to share). */
 static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb,
                           unskewed_cols *uc)
 {
@@ -737,13 +737,15 @@ static void depth_weights(const vs_footprint *fp, float z, int k0, int k1, int w
     }
 }
 
-/* Voxel at a time (separable footprints): each voxel starting at sheet
- * `opening` is tested once against the occlusion map, builds its footprint
- * block once (src/block.h) and adds it, weighted by each slab's depth
- * integral, to every sheet its kernel reaches; sheet k lives in ring slot
- * (k - kbase) mod R.  Only the block's rows inside the buffer and its
- * vectors that overlap it are built and added; a vector may spill up to
- * 8/ch - 1 pixels into the apron. */
+/* Voxel at a time (separable footprints, and sheared_blocks below): each
+ * voxel starting at sheet `opening` is tested once against the occlusion
+ * map, builds its footprint block once (src/block.h) and adds it, weighted
+ * by each slab's depth integral, to every sheet its kernel reaches; sheet k
+ * lives in ring slot (k - kbase) mod R.  Only the block's rows inside the
+ * buffer and its vectors that overlap it are built and added; a vector may
+ * spill up to 8/ch - 1 pixels into the apron.  Sheared axis-aligned footprints
+ * (sheared_blocks) are tested once the same way, then each section is
+ * placed at its own centre and added to its sheet (raster_skewed). */
 static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase)
 {
     const tile_ctx *t = ts->t;
@@ -796,7 +798,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 float w4[4];
                 voxel_weights(F, e->v, w4);
                 const sheet_geom sh = {g, 1.0f, 1.0f};
-                unskewed_cols uc = {.cx = NAN}; /* shared by its sections when only y moves */
+                unskewed_cols uc; /* shared by its sections when only y moves */
+                uc.g = NULL;
                 for (int k = opening; k <= kl; k++) {
                     section sec;
                     if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
@@ -1031,6 +1034,7 @@ static void perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
 static void skip_opaque(const tile_ctx *t, const spans *r, const float *acc, float *alpha)
 {
     for (int y = r->y0; y < r->y1; y++) {
+        if (r->xa[y] == r->xb[y]) continue;
         const int o = (y - 1) * t->tw + (r->xa[y] - 1);
         const float *a = acc + 4 * o + 3;
         float *al = alpha + o;
@@ -1056,8 +1060,8 @@ static void shaded_spans(const rect *r, const int *live0, const int *live1, span
 }
 
 /* After compositing: the live columns of own row y shrink past pixels
- * whose accumulated opacity reached 1 (a scan from each end, so each pixel
- * is passed once per tile). */
+ * whose accumulated opacity reached 1 (a scan from each end that stops at
+ * the first pixel still open: each opaque pixel is passed once per tile). */
 static void shrink_live(const tile_ctx *t, const float *acc, int y, int *live0, int *live1)
 {
     const float *a = acc + 4 * (size_t)y * t->tw + 3;
@@ -1171,9 +1175,10 @@ void vs_tile_render(void *arg, int worker, int task)
         ts.kmax = kmax;
     }
 
-    /* Sheet buffers: voxel-at-a-time for separable footprints (a ring that
-     * holds every sheet a kernel reaches, plus the neighbours central
-     * differences read), else sheet-at-a-time with three buffers. */
+    /* Sheet buffers: voxel-at-a-time for separable and sheared_blocks
+     * footprints (a ring that holds every sheet a kernel reaches, plus the
+     * neighbours central differences read), else sheet-at-a-time with three
+     * buffers. */
     const int vspan = (int)ceilf(2.0f * rz / slab) + 1; /* sheets one kernel can reach */
     const int multi = F->use_blocks;
     const int R = multi ? vspan + 2 : 3;

@@ -272,6 +272,23 @@ static void test_invariance(void)
         for (int j = 0; j < dims[1]; j++)
             for (int i = 0; i < dims[0]; i++) d[((size_t)k * dims[1] + j) * dims[0] + i] = (float)f_ball(i, j, k);
     vs_volume_update_range(v);
+    {
+        /* the view this suite uses gives a sheared, axis-aligned footprint
+         * (voxel at a time, a section per sheet): else it tests another path */
+        vs_settings s;
+        vs_settings_init(&s);
+        s.azimuth = 30;
+        s.elevation = 20;
+        vs_camera cam;
+        vs_footprint fp;
+        if (vs_camera_setup(ctx, v, &s, &cam) == VS_OK && vs_footprint_setup(ctx, &s, &cam, &fp) == VS_OK) {
+            CHECK(fp.sheared && fp.B == 0.0f, "anisotropic ball: footprint not sheared and axis-aligned (B = %g)",
+                  fp.B);
+            vs_footprint_free(&fp);
+        } else {
+            CHECK(0, "footprint: %s", vs_last_error(ctx));
+        }
+    }
     test_invariance_of(v, "anisotropic ball");
     vs_volume_release(v);
 }
@@ -418,6 +435,7 @@ static void test_context_reuse(void)
     vs_context *seq_ctx;
     if (vs_context_create(&seq_ctx) != VS_OK) {
         CHECK(0, "context");
+        for (int i = 0; i < 3; i++) vs_volume_release(v[i]);
         return;
     }
     for (size_t n = 0; n < sizeof seq / sizeof *seq; n++) {
@@ -431,7 +449,10 @@ static void test_context_reuse(void)
         s.threads = 1 + (int)(n % 2);
         vs_image a, b;
         vs_context *c;
-        if (vs_context_create(&c) != VS_OK) continue;
+        if (vs_context_create(&c) != VS_OK) {
+            CHECK(0, "context");
+            continue;
+        }
         int ok = vs_render(c, v[seq[n].vol], &s, &a, NULL) == VS_OK;
         vs_context_release(c);
         if (!ok) {
