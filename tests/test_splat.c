@@ -13,17 +13,23 @@
 
 static vs_context *ctx;
 
-static vs_volume *make_volume(int n, double (*f)(int, int, int))
+/* A float volume of f on a grid (spacing NULL: 1 in every axis). */
+static vs_volume *make_grid(const int dims[3], const double *spacing, double (*f)(int, int, int))
 {
     vs_volume *v;
-    int dims[3] = {n, n, n};
-    if (vs_volume_create(ctx, VS_F32, dims, NULL, &v) != VS_OK) return NULL;
+    if (vs_volume_create(ctx, VS_F32, dims, spacing, &v) != VS_OK) return NULL;
     float *d = vs_volume_data(v);
-    for (int k = 0; k < n; k++)
-        for (int j = 0; j < n; j++)
-            for (int i = 0; i < n; i++) d[((size_t)k * n + j) * n + i] = (float)f(i, j, k);
+    for (int k = 0; k < dims[2]; k++)
+        for (int j = 0; j < dims[1]; j++)
+            for (int i = 0; i < dims[0]; i++) d[((size_t)k * dims[1] + j) * dims[0] + i] = (float)f(i, j, k);
     vs_volume_update_range(v);
     return v;
+}
+
+static vs_volume *make_volume(int n, double (*f)(int, int, int))
+{
+    const int dims[3] = {n, n, n};
+    return make_grid(dims, NULL, f);
 }
 
 static double f_const(int i, int j, int k) { return 1.0; }
@@ -263,15 +269,10 @@ static void test_invariance(void)
     vs_volume_release(v);
     const int dims[3] = {32, 32, 20};
     const double spacing[3] = {1.0, 1.0, 1.6};
-    if (vs_volume_create(ctx, VS_F32, dims, spacing, &v) != VS_OK) {
+    if (!(v = make_grid(dims, spacing, f_ball))) {
         CHECK(0, "volume: %s", vs_last_error(ctx));
         return;
     }
-    float *d = vs_volume_data(v);
-    for (int k = 0; k < dims[2]; k++)
-        for (int j = 0; j < dims[1]; j++)
-            for (int i = 0; i < dims[0]; i++) d[((size_t)k * dims[1] + j) * dims[0] + i] = (float)f_ball(i, j, k);
-    vs_volume_update_range(v);
     {
         /* the view this suite uses gives a sheared, axis-aligned footprint
          * (voxel at a time, a section per sheet): else it tests another path */
