@@ -18,7 +18,8 @@ typedef struct kernel_entry {
     int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
                  8 gradient-splat block (mixing), 9 project_brick (8n voxels),
                  10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets),
-                 12 place_voxels (n voxels in batches of 16) */
+                 12 place_voxels (n voxels in batches of 16),
+                 13 splat_voxel_gs (as splat_voxel4, with the gradient layout) */
     void *fn;
 } kernel_entry;
 
@@ -150,6 +151,16 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                                        0.1f,  0.3f, 0.5f,  0.7f, 0.9f, 0.8f, 0.7f, 0.6f};
                 ((vs_splat_voxel1_fn)k->fn)(d4, w16, 4, BLOCK_DS, ex, ex + 64, BLOCK_ROWS, block_nvec(n), 1e-6f);
             } break;
+            case 13: {
+                float *d4[4] = {buf + off, buf + off + SHEET_STEP, buf + off + 2 * SHEET_STEP, buf + off + 3 * SHEET_STEP};
+                const float w16[16] = {0.25f, -0.5f, 0.75f, 0.1f, 0.2f, -0.4f, 0.6f, 0.08f,
+                                       0.1f,  -0.3f, 0.5f, 0.07f, 0.9f, -0.8f, 0.7f, 0.06f};
+                static const float dxy[32] = {-3.5f, -2.5f, -1.5f, -0.5f, 0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f,
+                                              7.5f,  8.5f,  9.5f,  10.5f, 11.5f, 0, 0, 0, 0, 0, 0, 0, 0,
+                                              -3.2f, -2.2f, -1.2f, -0.2f, 0.8f, 1.8f, 2.8f, 3.8f};
+                ((vs_splat_voxel_gs_fn)k->fn)(d4, w16, 4, BLOCK_DS, ex, ex + 64, dxy, dxy + 24, BLOCK_ROWS,
+                                              block_nvec(n), 1e-6f);
+            } break;
             case 12:
                 for (int b = 0; b < n; b += VS_PLACE_BATCH) {
                     volatile unsigned live = ((vs_place_voxels_fn)k->fn)(
@@ -174,7 +185,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 || k->kind == 11 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS
+    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 || k->kind == 11 || k->kind == 13 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS
                                                                                : n;
     return best * 1e6 / ((double)reps * elems);
 }
@@ -233,6 +244,8 @@ int bench_kernels(const bench_opts *o)
         {"splat_voxel1", VS_ISA_AVX512, 10, (void *)vs_splat_voxel1_avx512},
         {"splat_voxel4", VS_ISA_SCALAR, 11, (void *)vs_splat_voxel4_scalar},
         {"splat_voxel4", VS_ISA_AVX2, 11, (void *)vs_splat_voxel4_avx2},
+        {"splat_voxel_gs", VS_ISA_SCALAR, 13, (void *)vs_splat_voxel_gs_scalar},
+        {"splat_voxel_gs", VS_ISA_AVX2, 13, (void *)vs_splat_voxel_gs_avx2},
         {"project_brick", VS_ISA_SCALAR, 9, (void *)vs_project_brick_scalar},
         {"project_brick", VS_ISA_AVX2, 9, (void *)vs_project_brick_avx2},
         {"project_brick", VS_ISA_AVX512, 9, (void *)vs_project_brick_avx512},

@@ -66,3 +66,32 @@ void vs_splat_voxel4_avx2(float *const *dst, const float *w, int ns, ptrdiff_t d
         }
     }
 }
+
+void vs_splat_voxel_gs_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            const float *dx, const float *dy, int rows, int nvec, float thr)
+{
+    const __m256 t = _mm256_set1_ps(thr), one = _mm256_set1_ps(1.0f);
+    const __m256i spread[4] = {_mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1), _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3),
+                               _mm256_setr_epi32(4, 4, 4, 4, 5, 5, 5, 5), _mm256_setr_epi32(6, 6, 6, 6, 7, 7, 7, 7)};
+    __m256 w8[VS_MAX_SHEETS_VOXEL];
+    for (int s = 0; s < ns; s++) w8[s] = _mm256_broadcast_ps((const __m128 *)(const void *)(w + 4 * s));
+    for (int r = 0; r < rows; r++) {
+        const __m256 ry = _mm256_set1_ps(rw[r]);
+        /* the layout's factors (1, dx, dy, 1) a pixel: h times 1 is h exactly */
+        const __m256 fy = _mm256_blend_ps(one, _mm256_set1_ps(dy[r]), 0x44);
+        for (int v = 0; v < nvec; v += 4) {
+            __m256 h = _mm256_mul_ps(_mm256_loadu_ps(cw + 2 * v), ry);
+            h = _mm256_and_ps(h, _mm256_cmp_ps(h, t, _CMP_GT_OQ));
+            const __m256 x8 = _mm256_loadu_ps(dx + 2 * v);
+            const int nq = nvec - v < 4 ? nvec - v : 4;
+            for (int q = 0; q < nq; q++) {
+                const __m256 f = _mm256_blend_ps(fy, _mm256_permutevar8x32_ps(x8, spread[q]), 0x22);
+                const __m256 hq = _mm256_mul_ps(_mm256_permutevar8x32_ps(h, spread[q]), f);
+                for (int s = 0; s < ns; s++) {
+                    float *d = dst[s] + r * ds + 8 * (v + q);
+                    _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(w8[s], hq)));
+                }
+            }
+        }
+    }
+}

@@ -211,6 +211,27 @@ void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
     }
 }
 
+void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
+                              const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr)
+{
+    float b[4 * VS_VOXEL1_MAX];
+    const int n = 2 * nvec;
+    for (int r = 0; r < rows; r++) {
+        for (int p = 0; p < n; p++) { /* vs_block_build's gradient layout */
+            const float v = cw[p] * rw[r], h = v > thr ? v : 0.0f;
+            b[4 * p] = h;
+            b[4 * p + 1] = h * dx[p];
+            b[4 * p + 2] = h * dy[r];
+            b[4 * p + 3] = h;
+        }
+        for (int s = 0; s < ns; s++) {
+            float *d = dst[s] + r * ds;
+            const float *ws = w + 4 * s;
+            for (int i = 0; i < 4 * n; i++) d[i] += ws[i % 4] * b[i];
+        }
+    }
+}
+
 /* G(z) as src/footprint.h's vs_fp_depth */
 static inline float depth_at(const vs_place_in *P, float z)
 {

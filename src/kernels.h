@@ -149,6 +149,14 @@ typedef struct vs_kernels {
      * cw must be readable (any values) up to a multiple of 8 floats */
     void (*splat_voxel4)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                          int rows, int nvec, float thr);
+    /* gradient splats of one voxel (post-gs, separable footprints): pixel p
+     * of row r has h = cw[p] rw[r] (0 where not > thr) and the block layout
+     * (h, h dx[p], h dy[r], h) of src/block.c, p < 2 nvec, and
+     *   dst[s][r ds + 4p + c] += w[4s + c] layout[c],  c < 4, s < ns, r < rows
+     * (vs_block_build and one splat_block a sheet, without the block in
+     * memory); cw and dx must be readable up to a multiple of 8 floats */
+    void (*splat_voxel_gs)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                           const float *dx, const float *dy, int rows, int nvec, float thr);
     /* activation of n (<= VS_PLACE_BATCH) voxels whose centres x, y, z lie
      * at xyz[i stride ..]: bit i of the result is set unless voxel i is
      * occluded (P->sat: every tile pixel within pad of its centre opaque,
@@ -194,6 +202,12 @@ void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
                             int rows, int nvec, float thr);
 void vs_splat_voxel4_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                           int rows, int nvec, float thr);
+typedef void (*vs_splat_voxel_gs_fn)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
+                                     const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr);
+void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
+                              const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr);
+void vs_splat_voxel_gs_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            const float *dx, const float *dy, int rows, int nvec, float thr);
 typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);

@@ -774,8 +774,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                            .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
                            /* the voxel kernels' factors, for blocks they take whole */
-                           .colw = !F->sheared_blocks && pl != VS_PIPELINE_POST_GS && g->bx <= VS_VOXEL1_MAX &&
-                                           g->ny <= VS_VOXEL1_MAX
+                           .colw = !F->sheared_blocks && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX
                                        ? g->colw
                                        : NULL,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
@@ -875,6 +874,37 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
             depth_weights(&F->fp, e->z, opening, kl, pl == VS_PIPELINE_POST_GS, D, E);
             vs_block_place_at(g, e->x, e->y, &pl_); /* the gradient layout needs the phases too */
+            if (pl == VS_PIPELINE_POST_GS && P.colw && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
+                /* gradient splats: the block's rows (h, h dx, h dy, h) built
+                 * in registers and added to every sheet in one kernel call,
+                 * with the weights and offsets the block path uses */
+                float w[4 * VS_MAX_VSPAN];
+                float *dst[VS_MAX_VSPAN];
+                int ns = 0;
+                for (int k = opening; k <= kl; k++) {
+                    if (!(D[k - opening] > 0.0f)) continue;
+                    const int slot = slots[k - opening];
+                    const float wD = wv[0] * D[k - opening];
+                    dst[ns] = ring[slot] + off;
+                    w[4 * ns] = wD;
+                    w[4 * ns + 1] = -2.0f * wD * A;
+                    w[4 * ns + 2] = -2.0f * wD * rk;
+                    w[4 * ns + 3] = wv[0] * E[k - opening];
+                    ns++;
+                    merge_box(&bbs[slot], &box);
+                }
+                ts->ws->splatted += (uint64_t)ns;
+                /* offsets from the centre (vs_block_build): column i lies
+                 * i + ux - rx0 away, row j lies j + uy - ry0 away */
+                float dx[VS_VOXEL1_MAX + 8], dy[VS_BLOCK_MAX_SPAN];
+                const float ux = pl_.ux - g->rx0, uy = pl_.uy - g->ry0;
+                const int np = (v1 - v0) * ppv;
+                for (int i = 0; i < np; i++) dx[i] = (float)(v0 * ppv + i) + ux;
+                for (int i = np; i < np + 8; i++) dx[i] = 0.0f; /* read up to a multiple of 8 */
+                for (int j = j0; j < j1; j++) dy[j - j0] = (float)j + uy;
+                F->kern.splat_voxel_gs(dst, w, ns, ds, cw, rw, dx, dy, j1 - j0, v1 - v0, g->thr);
+                continue;
+            }
             vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
             const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
             for (int k = opening; k <= kl; k++) {

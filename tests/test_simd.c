@@ -496,6 +496,86 @@ static int check_voxel(const char *isa, int ch, vs_splat_voxel1_fn ref_fn, vs_sp
     return bad;
 }
 
+/* splat_voxel_gs: 0..9 rows, 1..9 vectors and 32 (four-vector groups and
+ * their tails, the widest row), 0..6 sheets at distinct unaligned places,
+ * products at and around the threshold, NaN and -0 column factors, offsets
+ * of both signs and 0.  With `fn`, every float of the buffer, guards
+ * included, must equal the scalar kernel's; without, the scalar kernel
+ * must equal the block route it replaces: the gradient layout built into a
+ * block (as vs_block_build does) and added by splat_block once a sheet.
+ * Returns the number of mismatching cases. */
+static int check_voxel_gs(const char *isa, vs_splat_voxel_gs_fn ref_fn, vs_splat_voxel_gs_fn fn)
+{
+    enum { DS = 300, ROWS = 9, NB = 7 * DS * 10 + 400 };
+    static float ref[NB], out[NB], blk[ROWS * 4 * VS_VOXEL1_MAX];
+    float cw[VS_VOXEL1_MAX + 8], dx[VS_VOXEL1_MAX + 8], rw[ROWS], dy[ROWS], w[4 * 8];
+    int bad = 0, cases = 0;
+    for (int nvec = 1; nvec <= 10; nvec++)
+        for (int rows = 0; rows <= ROWS; rows++)
+            for (int ns = 0; ns <= 6; ns++) {
+                const int nv = nvec == 10 ? VS_VOXEL1_MAX / 2 : nvec, npx = 2 * nv;
+                const float thr = 0.01f;
+                for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) {
+                    cw[i] = (frand() + 1.0f) * 0.5f;
+                    dx[i] = 4.0f * frand();
+                }
+                cw[0] = NAN;
+                if (npx > 2) cw[2] = -0.0f;
+                if (npx > 3) dx[3] = 0.0f;
+                cw[npx - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
+                for (int r = 0; r < rows; r++) {
+                    rw[r] = (frand() + 1.0f) * 0.5f;
+                    dy[r] = 4.0f * frand();
+                }
+                if (rows > 1) rw[1] = 1.0f;
+                if (rows > 2) rw[2] = nextafterf(1.0f, 2.0f);
+                for (int i = 0; i < NB; i++) ref[i] = out[i] = frand();
+                float *dr[8], *dout[8];
+                for (int sh = 0; sh < ns; sh++) {
+                    const int o = 3 + sh * (DS * 10 + 5) + (sh & 1) * 7; /* unaligned, distinct */
+                    dr[sh] = ref + o;
+                    dout[sh] = out + o;
+                    for (int c = 0; c < 4; c++) w[4 * sh + c] = c == 1 && sh == 1 ? 0.0f : frand();
+                }
+                if (fn) {
+                    ref_fn(dr, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
+                    fn(dout, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
+                } else {
+                    for (int r = 0; r < rows; r++)
+                        for (int q = 0; q < npx; q++) {
+                            const float v = cw[q] * rw[r], h = v > thr ? v : 0.0f;
+                            float *b = blk + (size_t)r * 4 * npx + 4 * q;
+                            b[0] = h;
+                            b[1] = h * dx[q];
+                            b[2] = h * dy[r];
+                            b[3] = h;
+                        }
+                    for (int sh = 0; sh < ns; sh++) {
+                        const float w8[8] = {w[4 * sh],     w[4 * sh + 1], w[4 * sh + 2], w[4 * sh + 3],
+                                             w[4 * sh],     w[4 * sh + 1], w[4 * sh + 2], w[4 * sh + 3]};
+                        vs_splat_block_scalar(dr[sh], DS, blk, 4 * npx, rows, nv, w8);
+                    }
+                    ref_fn(dout, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
+                }
+                cases++;
+                if (memcmp(ref, out, sizeof ref)) {
+                    bad++;
+                    if (isa)
+                        CHECK(0, "splat_voxel_gs %s: %d vectors, %d rows, %d sheets differ", isa, nv, rows, ns);
+                }
+            }
+    if (isa) printf("splat_voxel_gs %s  bit-identical to %s in %d cases\n", isa, fn ? "scalar" : "the block route", cases);
+    return bad;
+}
+
+/* a deliberately wrong gradient splat: the row offset on channel 1 */
+static void voxel_gs_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                         const float *dx, const float *dy, int rows, int nvec, float thr)
+{
+    (void)dx;
+    vs_splat_voxel_gs_scalar(dst, w, ns, ds, cw, rw, dy, dy, rows, nvec, thr);
+}
+
 /* a deliberately wrong voxel splat: keeps products equal to the threshold */
 static void voxel1_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                        int rows, int nvec, float thr)
@@ -712,7 +792,7 @@ static void check_dispatch(void)
               vs_isa_name(want));
         CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.splat_block_mix &&
                   k.classify_cd && k.classify_gs && k.shade_lut && k.splat_voxel1 && k.splat_voxel4 &&
-                  k.project_brick && k.place_voxels,
+                  k.splat_voxel_gs && k.project_brick && k.place_voxels,
               "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
@@ -740,6 +820,9 @@ int main(void)
           "check_voxel cannot tell a wrong kernel from the reference");
     CHECK(check_voxel(NULL, 4, vs_splat_voxel4_scalar, voxel4_off),
           "check_voxel (4 channels) cannot tell a wrong kernel from the reference");
+    check_voxel_gs("scalar", vs_splat_voxel_gs_scalar, NULL);
+    CHECK(check_voxel_gs(NULL, vs_splat_voxel_gs_scalar, voxel_gs_off),
+          "check_voxel_gs cannot tell a wrong kernel from the reference");
     CHECK(check_place(NULL, vs_place_voxels_scalar, 1) == 0,
           "place_voxels scalar reference disagrees with the brute-force occlusion, vs_block_place_at or vs_fp_depth");
     CHECK(check_place(NULL, place_off, 0) > 0, "check_place cannot tell a wrong kernel from the reference");
@@ -763,6 +846,7 @@ int main(void)
         check_project("avx2", vs_project_brick_avx2);
         check_voxel("avx2", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx2);
         check_voxel("avx2", 4, vs_splat_voxel4_scalar, vs_splat_voxel4_avx2);
+        check_voxel_gs("avx2", vs_splat_voxel_gs_scalar, vs_splat_voxel_gs_avx2);
         check_place("avx2", vs_place_voxels_avx2, 0);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
