@@ -786,6 +786,12 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         for (int l = 0; l < nb; l++) __builtin_prefetch(vdata + (size_t)bk->p[i0 + l].v * vsize);
         unsigned live = F->kern.place_voxels(&bk->p[i0].x, (int)(sizeof(pend) / sizeof(float)), nb, &P, &pv);
         ts->ws->culled += (uint64_t)(nb - __builtin_popcount(live));
+        /* the splat weights of the batch's live voxels first: pre-shaded
+         * ones read the shading tables at random (cache misses), which one
+         * voxel at a time waited for between footprint adds */
+        float wvs[VS_PLACE_BATCH][4];
+        for (unsigned m = live; m; m &= m - 1)
+            voxel_weights(F, bk->p[i0 + __builtin_ctz(m)].v, wvs[__builtin_ctz(m)]);
         for (; live; live &= live - 1) {
             const int lane = __builtin_ctz(live);
             const pend *e = &bk->p[i0 + lane];
@@ -794,8 +800,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 /* each section at its own centre (the kernel's centroid in
                  * its slab), placed and added as on the sheet-at-a-time
                  * path, into its sheet of the ring */
-                float w4[4];
-                voxel_weights(F, e->v, w4);
+                const float *w4 = wvs[lane];
                 const sheet_geom sh = {g, 1.0f, 1.0f};
                 unskewed_cols uc; /* shared by its sections when only y moves */
                 uc.g = NULL;
@@ -828,8 +833,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
             const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
             const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
-            float wv[4];
-            voxel_weights(F, e->v, wv);
+            const float *wv = wvs[lane];
             if (pl == VS_PIPELINE_POST_CD && 8 * (v1 - v0) <= VS_VOXEL1_MAX) {
                 /* density: the block is built in registers and added to every
                  * sheet in one kernel call */
