@@ -448,6 +448,28 @@ static int project_off(const uint16_t *vox, int n, const vs_project_in *P, uint1
     return q;
 }
 
+/* What the voxel kernels' checks share: column factors (random, a NaN, a
+ * -0, and one exactly at the threshold times the row weight 1), row
+ * factors (random, 1 and just above 1), a buffer of random floats in two
+ * copies, and ns sheets at distinct unaligned places in each. */
+static void voxel_case(float *cw, int npx, float *rw, int rows, float thr, float *ref, float *out, int nb, int ds, int ns,
+                       float **dr, float **dout)
+{
+    for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) cw[i] = (frand() + 1.0f) * 0.5f;
+    cw[0] = NAN;
+    if (npx > 2) cw[2] = -0.0f;
+    cw[npx - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
+    for (int r = 0; r < rows; r++) rw[r] = (frand() + 1.0f) * 0.5f;
+    if (rows > 1) rw[1] = 1.0f;
+    if (rows > 2) rw[2] = nextafterf(1.0f, 2.0f);
+    for (int i = 0; i < nb; i++) ref[i] = out[i] = frand();
+    for (int sh = 0; sh < ns; sh++) {
+        const int o = 3 + sh * (ds * 10 + 5) + (sh & 1) * 7;
+        dr[sh] = ref + o;
+        dout[sh] = out + o;
+    }
+}
+
 /* splat_voxel1 (ch 1) and splat_voxel4 (ch 4): 0..9 rows, 1..8 vectors
  * (odd counts: the AVX-512 tail; for ch 4 fewer than four vectors of a
  * group), 0..6 sheets at distinct unaligned places in one buffer, row
@@ -466,21 +488,10 @@ static int check_voxel(const char *isa, int ch, vs_splat_voxel1_fn ref_fn, vs_sp
             for (int ns = 0; ns <= 6; ns++) {
                 const float thr = 0.01f;
                 const int npx = 8 * nvec / ch; /* pixels a row */
-                for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) cw[i] = (frand() + 1.0f) * 0.5f;
-                cw[0] = NAN;
-                if (npx > 2) cw[2] = -0.0f;
-                cw[npx - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
-                for (int r = 0; r < rows; r++) rw[r] = (frand() + 1.0f) * 0.5f;
-                if (rows > 1) rw[1] = 1.0f;
-                if (rows > 2) rw[2] = nextafterf(1.0f, 2.0f);
-                for (int i = 0; i < NB; i++) ref[i] = out[i] = frand();
                 float *dr[8], *dout[8];
-                for (int sh = 0; sh < ns; sh++) {
-                    const int o = 3 + sh * (DS * 10 + 5) + (sh & 1) * 7; /* unaligned, distinct */
-                    dr[sh] = ref + o;
-                    dout[sh] = out + o;
+                voxel_case(cw, npx, rw, rows, thr, ref, out, NB, DS, ns, dr, dout);
+                for (int sh = 0; sh < ns; sh++)
                     for (int c = 0; c < 4; c++) w[4 * sh + c] = c == 1 ? 0.0f : frand();
-                }
                 if (ch == 1)
                     for (int sh = 0; sh < ns; sh++) w[sh] = w[4 * sh];
                 ref_fn(dr, w, ns, DS, cw, rw, rows, nvec, thr);
@@ -515,28 +526,13 @@ static int check_voxel_gs(const char *isa, vs_splat_voxel_gs_fn ref_fn, vs_splat
             for (int ns = 0; ns <= 6; ns++) {
                 const int nv = nvec == 10 ? VS_VOXEL1_MAX / 2 : nvec, npx = 2 * nv;
                 const float thr = 0.01f;
-                for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) {
-                    cw[i] = (frand() + 1.0f) * 0.5f;
-                    dx[i] = 4.0f * frand();
-                }
-                cw[0] = NAN;
-                if (npx > 2) cw[2] = -0.0f;
-                if (npx > 3) dx[3] = 0.0f;
-                cw[npx - 1] = thr; /* times rw = 1: exactly the threshold, dropped */
-                for (int r = 0; r < rows; r++) {
-                    rw[r] = (frand() + 1.0f) * 0.5f;
-                    dy[r] = 4.0f * frand();
-                }
-                if (rows > 1) rw[1] = 1.0f;
-                if (rows > 2) rw[2] = nextafterf(1.0f, 2.0f);
-                for (int i = 0; i < NB; i++) ref[i] = out[i] = frand();
                 float *dr[8], *dout[8];
-                for (int sh = 0; sh < ns; sh++) {
-                    const int o = 3 + sh * (DS * 10 + 5) + (sh & 1) * 7; /* unaligned, distinct */
-                    dr[sh] = ref + o;
-                    dout[sh] = out + o;
+                voxel_case(cw, npx, rw, rows, thr, ref, out, NB, DS, ns, dr, dout);
+                for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) dx[i] = 4.0f * frand(); /* offsets of both signs */
+                if (npx > 3) dx[3] = 0.0f;
+                for (int r = 0; r < rows; r++) dy[r] = 4.0f * frand();
+                for (int sh = 0; sh < ns; sh++)
                     for (int c = 0; c < 4; c++) w[4 * sh + c] = c == 1 && sh == 1 ? 0.0f : frand();
-                }
                 if (fn) {
                     ref_fn(dr, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
                     fn(dout, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
@@ -573,7 +569,13 @@ static void voxel_gs_off(float *const *dst, const float *w, int ns, ptrdiff_t ds
                          const float *dx, const float *dy, int rows, int nvec, float thr)
 {
     (void)dx;
-    vs_splat_voxel_gs_scalar(dst, w, ns, ds, cw, rw, dy, dy, rows, nvec, thr);
+    for (int r = 0; r < rows; r++)
+        for (int s = 0; s < ns; s++)
+            for (int p = 0; p < 2 * nvec; p++) {
+                const float v = cw[p] * rw[r], h = v > thr ? v : 0.0f;
+                const float lay[4] = {h, h * dy[r], h * dy[r], h};
+                for (int c = 0; c < 4; c++) dst[s][r * ds + 4 * p + c] += w[4 * s + c] * lay[c];
+            }
 }
 
 /* a deliberately wrong voxel splat: keeps products equal to the threshold */
