@@ -65,6 +65,7 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
     fp->Qzx = Q[2][0];
     fp->Qzy = Q[2][1];
     fp->rz = sqrt(fp->emax / fp->kappa);
+    fp->vspan = (int)ceilf(2.0f * (float)fp->rz / (float)fp->slab) + 1;
     /* footprint extent: the ellipse d^T Qxx d <= emax has half-widths
      * sqrt(emax * (Qxx^-1)_xx), plus the largest shift within +-rz */
     fp->rx = sqrt(fp->emax * C / det) + fabs(sx) * fp->rz;

@@ -41,6 +41,7 @@ typedef struct vs_footprint {
     int separable;       /* B == 0 and no shear: footprint = row x column      */
     double kappa;        /* depth exponent per view unit^2                     */
     double rz;           /* depth half-extent (view units)                     */
+    int vspan;           /* sheets one kernel can reach: ceil(2 rz / slab) + 1 */
     double rx, ry;       /* footprint half-extent in pixels (incl. shift)      */
     double slab;         /* sheet thickness (view units)                       */
     double Qzx, Qzy;     /* coupling terms for the z gradient splat            */
@@ -81,15 +82,22 @@ static inline float vs_fp_exp(const vs_footprint *fp, float t)
     return fp->exp_table[i] + f * (fp->exp_table[i + 1] - fp->exp_table[i]);
 }
 
+/* G(z) from a depth table of n entries, scale entries per unit, starting
+ * at -rz (the SIMD kernels' reference reads it through this too). */
+static inline float vs_depth_lookup(const float *table, int n, float scale, float rz, float z)
+{
+    float x = (z + rz) * scale;
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= (float)(n - 1)) return table[n - 1];
+    int i = (int)x;
+    float f = x - (float)i;
+    return table[i] + f * (table[i + 1] - table[i]);
+}
+
 /* G(z): integral of the depth term from -rz to z (clamped). */
 static inline float vs_fp_depth(const vs_footprint *fp, float z)
 {
-    float x = (z + (float)fp->rz) * fp->depth_scale;
-    if (!(x > 0.0f)) return 0.0f;
-    if (x >= (float)(fp->depth_n - 1)) return fp->depth_table[fp->depth_n - 1];
-    int i = (int)x;
-    float f = x - (float)i;
-    return fp->depth_table[i] + f * (fp->depth_table[i + 1] - fp->depth_table[i]);
+    return vs_depth_lookup(fp->depth_table, fp->depth_n, fp->depth_scale, (float)fp->rz, z);
 }
 
 #endif

@@ -1,7 +1,7 @@
 /* Scalar reference kernels: the definition every SIMD kernel is tested
  * against (tests/test_simd.c). */
 #include "kernels.h"
-#include "footprint.h" /* vs_ifloor, vs_iceil */
+#include "footprint.h" /* vs_ifloor, vs_iceil, vs_depth_lookup */
 
 #include <float.h>
 #include <math.h>
@@ -235,12 +235,7 @@ void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff
 /* G(z) as src/footprint.h's vs_fp_depth */
 static inline float depth_at(const vs_place_in *P, float z)
 {
-    const float x = (z + P->rz) * P->depth_scale;
-    if (!(x > 0.0f)) return 0.0f;
-    if (x >= (float)(P->depth_n - 1)) return P->depth[P->depth_n - 1];
-    const int i = (int)x;
-    const float f = x - (float)i;
-    return P->depth[i] + f * (P->depth[i + 1] - P->depth[i]);
+    return vs_depth_lookup(P->depth, P->depth_n, P->depth_scale, P->rz, z);
 }
 
 /* the tile pixels within pad of (x, y) all opaque, or none of them */

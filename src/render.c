@@ -247,7 +247,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
          * block stays small (else the general sheet-at-a-time path, which
          * also serves perspective, where a footprint's size varies with
          * its depth) */
-        int vspan = (int)ceilf(2.0f * (float)F.fp.rz / (float)F.fp.slab) + 1;
+        const int vspan = F.fp.vspan;
         int ch = s->pipeline == VS_PIPELINE_POST_CD ? 1 : 4;
         double det = (double)F.fp.A * F.fp.C - (double)F.fp.B * F.fp.B;
         double nx = 2.0 * sqrt(F.fp.emax * F.fp.C / det) + 1, ny = 2.0 * sqrt(F.fp.emax * F.fp.A / det) + 1;

@@ -788,7 +788,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
      * time (a SIMD kernel); the occlusion map does not change while a
      * sheet is activated, so batching culls exactly what one by one did */
     const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
-    const int nd = (int)ceilf(2.0f * rz / slab) + 1; /* sheets one kernel can reach */
+    const int nd = F->fp.vspan; /* sheets one kernel can reach */
     const vs_place_in P = {.sat = F->s->occlusion && *ts->opaque > 0 ? ts->sat : NULL,
                            .tx0 = t->x0, .ty0 = t->y0, .tw = t->tw, .th = t->th,
                            .pad_x = (float)F->pad_x, .pad_y = (float)F->pad_y,
@@ -1219,7 +1219,7 @@ void vs_tile_render(void *arg, int worker, int task)
      * footprints (a ring that holds every sheet a kernel reaches, plus the
      * neighbours central differences read), else sheet-at-a-time with three
      * buffers. */
-    const int vspan = (int)ceilf(2.0f * rz / slab) + 1; /* sheets one kernel can reach */
+    const int vspan = F->fp.vspan;
     const int multi = F->use_blocks;
     const int R = multi ? vspan + 2 : 3;
     const size_t sheet_floats = (size_t)ch * t.stride * t.bh;
