@@ -27,8 +27,20 @@ static inline __m256 depth8(const vs_place_in *P, __m256 m, __m256 z)
     const __m256 mid = _mm256_andnot_ps(top, pos);
     const __m256i i = _mm256_cvttps_epi32(x);
     const __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
-    const __m256 t0 = _mm256_mask_i32gather_ps(_mm256_setzero_ps(), P->depth, i, mid, 4);
-    const __m256 t1 = _mm256_mask_i32gather_ps(_mm256_setzero_ps(), P->depth + 1, i, mid, 4);
+    /* entries i and i + 1 as one 8-byte gather element (half the elements
+     * of two float gathers), then split into t0 and t1 */
+    const __m256i mi = _mm256_castps_si256(mid);
+    const __m256 lo = _mm256_castsi256_ps(_mm256_mask_i32gather_epi64(
+        _mm256_setzero_si256(), (const long long *)(const void *)P->depth, _mm256_castsi256_si128(i),
+        _mm256_cvtepi32_epi64(_mm256_castsi256_si128(mi)), 4));
+    const __m256 hi = _mm256_castsi256_ps(_mm256_mask_i32gather_epi64(
+        _mm256_setzero_si256(), (const long long *)(const void *)P->depth, _mm256_extracti128_si256(i, 1),
+        _mm256_cvtepi32_epi64(_mm256_extracti128_si256(mi, 1)), 4));
+    /* shuffle_ps gives lanes 0 1 4 5 2 3 6 7; the 64-bit permute orders them */
+    const __m256 t0 = _mm256_castpd_ps(_mm256_permute4x64_pd(
+        _mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0))), _MM_SHUFFLE(3, 1, 2, 0)));
+    const __m256 t1 = _mm256_castpd_ps(_mm256_permute4x64_pd(
+        _mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1))), _MM_SHUFFLE(3, 1, 2, 0)));
     const __m256 g = _mm256_and_ps(mid, _mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0))));
     return _mm256_blendv_ps(g, _mm256_set1_ps(P->depth[P->depth_n - 1]), top);
 }
