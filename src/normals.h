@@ -40,8 +40,11 @@ vs_status vs_shade_lut_setup(vs_context *ctx, int nl, const vs_light *light, vs_
 void vs_shade_lut_free(vs_shade_lut *lut);
 
 /* Shade a gradient (eye frame, any scale) through the tables. */
-static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy, float gz,
-                                     float *diffuse, float *specular)
+/* The first step of vs_shade_lut_eval: the gradient quantised to signed
+ * bytes, as the (gy, gx) cell of lambda_bin and radius (returned) and the
+ * gz row of phi_bin (*zrow).  Split out so that a batch can issue each
+ * level of the dependent table look-ups for all its members at once. */
+static inline int vs_shade_lut_cell(float gx, float gy, float gz, int *zrow)
 {
     float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
     float m = ax > ay ? ax : ay;
@@ -60,9 +63,18 @@ static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy
         iz = vs_round_byte(gz * k);
     }
     if (ix == 0 && iy == 0 && iz == 0) iz = -127; /* zero gradient: faces the eye */
-    int li = lut->lambda_bin[(iy + 127) * 255 + (ix + 127)];
-    int r = lut->radius[(iy + 127) * 255 + (ix + 127)];
-    int pi = lut->phi_bin[(iz + 127) * 181 + r];
+    *zrow = (iz + 127) * 181;
+    return (iy + 127) * 255 + (ix + 127);
+}
+
+static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy, float gz,
+                                     float *diffuse, float *specular)
+{
+    int zrow;
+    const int cell = vs_shade_lut_cell(gx, gy, gz, &zrow);
+    int li = lut->lambda_bin[cell];
+    int r = lut->radius[cell];
+    int pi = lut->phi_bin[zrow + r];
     *diffuse = lut->diffuse[pi * lut->nl + li];
     *specular = lut->specular[pi * lut->nl + li];
 }

@@ -460,40 +460,81 @@ typedef struct tile_state {
 static inline float lookup_corr(const vs_frame *F, const float *table, float v);
 static inline void lookup_color(const vs_frame *F, float v, float rgb[3]);
 
-/* Splat weights of the voxel at linear index v: density (post), or
- * classified colour times the Phong terms of its grid gradient (pre-shading:
- * once per voxel and view). */
-static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
+/* Splat weights of the voxels p[lane], lane in the mask `live` (at most
+ * VS_PLACE_BATCH), from their linear index in the volume: density (post),
+ * or classified colour times the Phong terms of its grid gradient
+ * (pre-shading: once per voxel and view).  The normal-table look-ups are a
+ * chain of three dependent loads that miss the cache; each level is issued
+ * for the whole batch before the next, so that the misses of different
+ * voxels overlap. */
+static void voxel_weights_batch(const vs_frame *F, const pend *p, unsigned live, float w[][4])
 {
     const float bscale = (float)(F->fp.b / F->fp.slab);
-    float val = vs_volume_density(F->vol, v);
     if (F->pipeline == VS_PIPELINE_POST_CD || F->pipeline == VS_PIPELINE_POST_GS) {
-        w[0] = val * bscale;
-        w[1] = w[2] = w[3] = 0.0f;
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            w[l][0] = vs_volume_density(F->vol, p[l].v) * bscale;
+            w[l][1] = w[l][2] = w[l][3] = 0.0f;
+        }
         return;
     }
-    float rgb[3], a = vs_classify_alpha(F->cls, val);
-    lookup_color(F, val, rgb);
     const int *dims = F->vol->dims;
-    float g[3];
-    vs_volume_grid_gradient(F->vol, (int)(v % (uint32_t)dims[0]), (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
-                            (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1])), v, g);
     const vs_camera *cam = &F->cam;
-    double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
-    double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
-                   -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
-                   gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
-    float d, sp;
-    if (F->s->exact_normals) {
-        double dd, ss;
-        vs_light_eval(&F->light, n, &dd, &ss);
-        d = (float)dd;
-        sp = (float)ss;
-    } else {
-        vs_shade_lut_eval(&F->lut, (float)n[0], (float)n[1], (float)n[2], &d, &sp);
+    const vs_shade_lut *lut = &F->lut;
+    float rgb[VS_PLACE_BATCH][3], alpha[VS_PLACE_BATCH], val[VS_PLACE_BATCH], d[VS_PLACE_BATCH],
+        sp[VS_PLACE_BATCH];
+    int cell[VS_PLACE_BATCH], zrow[VS_PLACE_BATCH], li[VS_PLACE_BATCH], r[VS_PLACE_BATCH];
+    for (unsigned m = live; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        const uint32_t v = p[l].v;
+        val[l] = vs_volume_density(F->vol, v);
+        alpha[l] = vs_classify_alpha(F->cls, val[l]);
+        lookup_color(F, val[l], rgb[l]);
+        float g[3];
+        vs_volume_grid_gradient(F->vol, (int)(v % (uint32_t)dims[0]), (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
+                                (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1])), v, g);
+        double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
+        double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
+                       -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
+                       gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
+        if (F->s->exact_normals) {
+            double dd, ss;
+            vs_light_eval(&F->light, n, &dd, &ss);
+            d[l] = (float)dd;
+            sp[l] = (float)ss;
+        } else {
+            cell[l] = vs_shade_lut_cell((float)n[0], (float)n[1], (float)n[2], &zrow[l]);
+        }
     }
-    for (int i = 0; i < 3; i++) w[i] = (rgb[i] * d + sp) * a * bscale;
-    w[3] = (F->pipeline == VS_PIPELINE_PRE ? a : val) * bscale;
+    if (!F->s->exact_normals) { /* vs_shade_lut_eval, a level at a time */
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            li[l] = lut->lambda_bin[cell[l]];
+            r[l] = lut->radius[cell[l]];
+        }
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            const int pi = lut->phi_bin[zrow[l] + r[l]];
+            li[l] += pi * lut->nl;
+        }
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            d[l] = lut->diffuse[li[l]];
+            sp[l] = lut->specular[li[l]];
+        }
+    }
+    for (unsigned m = live; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
+        w[l][3] = (F->pipeline == VS_PIPELINE_PRE ? alpha[l] : val[l]) * bscale;
+    }
+}
+
+/* The same for one voxel at linear index v. */
+static void voxel_weights(const vs_frame *F, uint32_t v, float w[4])
+{
+    const pend one = {.v = v};
+    voxel_weights_batch(F, &one, 1u, (float(*)[4])w);
 }
 
 /* Is every tile pixel that a footprint centred in [x0,x1] x [y0,y1] and
@@ -783,6 +824,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) slots[j] = (opening + j - kbase) % R;
     const char *vdata = F->vol->data;
     const size_t vsize = vs_type_size(F->vol->type);
+    const ptrdiff_t plane_bytes = (ptrdiff_t)vsize * F->vol->dims[0] * F->vol->dims[1];
+    const int pre_shaded = pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA;
     pend_bucket *bk = &ts->bk[opening - ts->kmin];
     /* occlusion test, placement and depth integrals a batch of voxels at a
      * time (a SIMD kernel); the occlusion map does not change while a
@@ -807,14 +850,19 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         /* a voxel's value is a cache miss in the volume: ask for the batch's
          * values before placing it */
         for (int l = 0; l < nb; l++) __builtin_prefetch(vdata + (size_t)bk->p[i0 + l].v * vsize);
+        if (pre_shaded) /* and the neighbours its gradient reads in the planes before and after */
+            for (int l = 0; l < nb; l++) {
+                const char *c = vdata + (size_t)bk->p[i0 + l].v * vsize;
+                __builtin_prefetch(c - plane_bytes);
+                __builtin_prefetch(c + plane_bytes);
+            }
         unsigned live = F->kern.place_voxels(&bk->p[i0].x, (int)(sizeof(pend) / sizeof(float)), nb, &P, &pv);
         ts->ws->culled += (uint64_t)(nb - __builtin_popcount(live));
         /* the splat weights of the batch's live voxels first: pre-shaded
          * ones read the shading tables at random (cache misses), which one
          * voxel at a time waited for between footprint adds */
         float wvs[VS_PLACE_BATCH][4];
-        for (unsigned m = live; m; m &= m - 1)
-            voxel_weights(F, bk->p[i0 + __builtin_ctz(m)].v, wvs[__builtin_ctz(m)]);
+        voxel_weights_batch(F, bk->p + i0, live, wvs);
         for (; live; live &= live - 1) {
             const int lane = __builtin_ctz(live);
             const pend *e = &bk->p[i0 + lane];
