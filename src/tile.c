@@ -756,20 +756,23 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
 }
 
 /* Depth integrals of a voxel at depth z over the slabs of sheets k0..k1
- * (D), and for gradient splats the integrals of its depth derivative (E):
- * neighbouring slabs share a boundary, so each boundary is looked up once.
- * Unsheared footprints only (the section centre does not move with depth). */
+ * (D, unless NULL), and for gradient splats the integrals of its depth
+ * derivative (E): neighbouring slabs share a boundary, so each boundary is
+ * looked up once.  Unsheared footprints only (the section centre does not
+ * move with depth). */
 static void depth_weights(const vs_footprint *fp, float z, int k0, int k1, int with_e, float *D, float *E)
 {
     const float slab = (float)fp->slab, rz = (float)fp->rz, kap = (float)fp->kappa;
     float b = (float)k0 * slab - z;
-    float g0 = vs_fp_depth(fp, b), e0 = 0.0f;
+    float g0 = D ? vs_fp_depth(fp, b) : 0.0f, e0 = 0.0f;
     if (with_e) e0 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
     for (int k = k0; k <= k1; k++) {
         b = (float)(k + 1) * slab - z;
-        float g1 = vs_fp_depth(fp, b);
-        D[k - k0] = g1 - g0;
-        g0 = g1;
+        if (D) {
+            float g1 = vs_fp_depth(fp, b);
+            D[k - k0] = g1 - g0;
+            g0 = g1;
+        }
         if (with_e) {
             float e1 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
             E[k - k0] = e1 - e0;
@@ -931,18 +934,19 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 continue;
             }
             float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
-            depth_weights(&F->fp, e->z, opening, kl, pl == VS_PIPELINE_POST_GS, D, E);
-            vs_block_place_at(g, e->x, e->y, &pl_); /* the gradient layout needs the phases too */
             if (pl == VS_PIPELINE_POST_GS && P.colw && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
                 /* gradient splats: the block's rows (h, h dx, h dy, h) built
                  * in registers and added to every sheet in one kernel call,
-                 * with the weights and offsets the block path uses */
+                 * with the weights and offsets the block path uses; the
+                 * depth integrals D come from place_voxels */
+                depth_weights(&F->fp, e->z, opening, kl, 1, NULL, E);
                 float w[4 * VS_MAX_VSPAN];
                 int ns = 0;
                 for (int k = opening; k <= kl; k++) { /* as reached_sheets, with the gradient weights */
-                    if (!(D[k - opening] > 0.0f)) continue;
+                    const float Dk = pv.D[k - opening][lane];
+                    if (!(Dk > 0.0f)) continue;
                     const int slot = slots[k - opening];
-                    const float wD = wv[0] * D[k - opening];
+                    const float wD = wv[0] * Dk;
                     dst[ns] = ring[slot] + off;
                     w[4 * ns] = wD;
                     w[4 * ns + 1] = -2.0f * wD * A;
@@ -953,9 +957,10 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 }
                 ts->ws->splatted += (uint64_t)ns;
                 /* offsets from the centre (vs_block_build): column i lies
-                 * i + ux - rx0 away, row j lies j + uy - ry0 away */
+                 * i + ux - rx0 away, row j lies j + uy - ry0 away, ux and uy
+                 * as vs_block_place_at computes them */
                 float dx[VS_VOXEL1_MAX + 8], dy[VS_BLOCK_MAX_SPAN];
-                const float ux = pl_.ux - g->rx0, uy = pl_.uy - g->ry0;
+                const float ux = ((float)pl_.x - (e->x - g->rx0)) - g->rx0, uy = ((float)pl_.y - (e->y - g->ry0)) - g->ry0;
                 const int np = (v1 - v0) * ppv;
                 for (int i = 0; i < np; i++) dx[i] = (float)(v0 * ppv + i) + ux;
                 for (int i = np; i < np + 8; i++) dx[i] = 0.0f; /* read up to a multiple of 8 */
@@ -963,6 +968,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 F->kern.splat_voxel_gs(dst, w, ns, ds, cw, rw, dx, dy, j1 - j0, v1 - v0, g->thr);
                 continue;
             }
+            depth_weights(&F->fp, e->z, opening, kl, pl == VS_PIPELINE_POST_GS, D, E);
+            vs_block_place_at(g, e->x, e->y, &pl_); /* the gradient layout needs the phases too */
             vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
             const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
             for (int k = opening; k <= kl; k++) {
