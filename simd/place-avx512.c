@@ -19,26 +19,43 @@ static inline __m512i iceil16(__m512 v)
                                  _mm512_set1_epi32(1));
 }
 
+/* table[i] + f (table[i + 1] - table[i]) in the lanes of m, else 0, f the
+ * fraction of x >= 0.  Entries i and i + 1 come as one 8-byte gather
+ * element: half the elements of two float gathers (a gather costs by the
+ * element on Zen 4). */
+static inline __m512 lerp_table16(const float *table, __mmask16 m, __m512 x)
+{
+    const __m512i i = _mm512_cvttps_epi32(x);
+    const __m512 f = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
+    const __m512i lo = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), (__mmask8)m, _mm512_castsi512_si256(i),
+                                                   table, 4);
+    const __m512i hi = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), (__mmask8)(m >> 8),
+                                                   _mm512_extracti64x4_epi64(i, 1), table, 4);
+    const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    const __m512 t0 = _mm512_castsi512_ps(_mm512_permutex2var_epi32(lo, even, hi));
+    const __m512 t1 = _mm512_castsi512_ps(_mm512_permutex2var_epi32(lo, _mm512_add_epi32(even, _mm512_set1_epi32(1)), hi));
+    return _mm512_maskz_add_ps(m, t0, _mm512_mul_ps(f, _mm512_sub_ps(t1, t0)));
+}
+
 /* G(z) in the lanes of m (vs_fp_depth) */
 static inline __m512 depth16(const vs_place_in *P, __mmask16 m, __m512 z)
 {
     const __m512 x = _mm512_mul_ps(_mm512_add_ps(z, _mm512_set1_ps(P->rz)), _mm512_set1_ps(P->depth_scale));
     const __mmask16 pos = _mm512_mask_cmp_ps_mask(m, x, _mm512_setzero_ps(), _CMP_GT_OQ);
     const __mmask16 top = _mm512_mask_cmp_ps_mask(pos, x, _mm512_set1_ps((float)(P->depth_n - 1)), _CMP_GE_OQ);
-    const __mmask16 mid = pos & ~top;
-    const __m512i i = _mm512_cvttps_epi32(x);
-    const __m512 f = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
-    /* entries i and i + 1 as one 8-byte gather element: half the elements
-     * of two float gathers (a gather costs by the element on Zen 4) */
-    const __m512i lo = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), (__mmask8)mid,
-                                                   _mm512_castsi512_si256(i), P->depth, 4);
-    const __m512i hi = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), (__mmask8)(mid >> 8),
-                                                   _mm512_extracti64x4_epi64(i, 1), P->depth, 4);
-    const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
-    const __m512 t0 = _mm512_castsi512_ps(_mm512_permutex2var_epi32(lo, even, hi));
-    const __m512 t1 = _mm512_castsi512_ps(_mm512_permutex2var_epi32(lo, _mm512_add_epi32(even, _mm512_set1_epi32(1)), hi));
-    __m512 g = _mm512_maskz_add_ps(mid, t0, _mm512_mul_ps(f, _mm512_sub_ps(t1, t0)));
+    const __m512 g = lerp_table16(P->depth, pos & ~top, x);
     return _mm512_mask_mov_ps(g, top, _mm512_set1_ps(P->depth[P->depth_n - 1]));
+}
+
+/* exp(-kappa b^2) for |b| < rz in the lanes of m, else 0 (the scalar
+ * reference's exp_at) */
+static inline __m512 exp16(const vs_place_in *P, __mmask16 m, __m512 b)
+{
+    const __mmask16 in = _mm512_mask_cmp_ps_mask(m, _mm512_abs_ps(b), _mm512_set1_ps(P->rz), _CMP_LT_OQ);
+    const __m512 x = _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(P->kappa), b), b),
+                                   _mm512_set1_ps(P->exp_scale));
+    const __mmask16 ok = _mm512_mask_cmp_ps_mask(in, x, _mm512_set1_ps((float)(P->exp_n - 1)), _CMP_LT_OQ);
+    return lerp_table16(P->exp_table, ok, x);
 }
 
 /* a block's first pixel and phase along one axis (vs_block_place_at) */
@@ -109,6 +126,14 @@ unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_pl
         const __m512 g1 = depth16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)(P->opening + j + 1) * P->slab), z));
         _mm512_storeu_ps(out->D[j], _mm512_sub_ps(g1, g0));
         g0 = g1;
+    }
+    if (P->with_e) {
+        __m512 e0 = exp16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)P->opening * P->slab), z));
+        for (int j = 0; j < P->nd; j++) {
+            const __m512 e1 = exp16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)(P->opening + j + 1) * P->slab), z));
+            _mm512_storeu_ps(out->E[j], _mm512_sub_ps(e1, e0));
+            e0 = e1;
+        }
     }
     if (P->colw)
         for (unsigned m = live; m; m &= m - 1) {

@@ -73,13 +73,20 @@ static inline vs_footprint vs_footprint_scaled(const vs_footprint *fp, float s)
 }
 void vs_footprint_free(vs_footprint *fp);
 
-static inline float vs_fp_exp(const vs_footprint *fp, float t)
+/* exp(-t) from a table of n entries, scale entries per unit of t >= 0 (the
+ * SIMD kernels' reference reads it through this too). */
+static inline float vs_exp_lookup(const float *table, int n, float scale, float t)
 {
-    float x = t * fp->exp_scale;
-    if (!(x < (float)(fp->exp_n - 1))) return 0.0f; /* truncated (and NaN) */
+    float x = t * scale;
+    if (!(x < (float)(n - 1))) return 0.0f; /* truncated (and NaN) */
     int i = (int)x;
     float f = x - (float)i;
-    return fp->exp_table[i] + f * (fp->exp_table[i + 1] - fp->exp_table[i]);
+    return table[i] + f * (table[i + 1] - table[i]);
+}
+
+static inline float vs_fp_exp(const vs_footprint *fp, float t)
+{
+    return vs_exp_lookup(fp->exp_table, fp->exp_n, fp->exp_scale, t);
 }
 
 /* G(z) from a depth table of n entries, scale entries per unit, starting

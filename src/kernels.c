@@ -238,6 +238,13 @@ static inline float depth_at(const vs_place_in *P, float z)
     return vs_depth_lookup(P->depth, P->depth_n, P->depth_scale, P->rz, z);
 }
 
+/* exp(-kappa b^2) inside the kernel's depth radius, else 0 (as src/tile.c's
+ * depth_weights) */
+static inline float exp_at(const vs_place_in *P, float b)
+{
+    return fabsf(b) < P->rz ? vs_exp_lookup(P->exp_table, P->exp_n, P->exp_scale, P->kappa * b * b) : 0.0f;
+}
+
 /* the tile pixels within pad of (x, y) all opaque, or none of them */
 static inline int occluded(const vs_place_in *P, float x, float y)
 {
@@ -282,6 +289,14 @@ unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_pl
             const float g1 = depth_at(P, (float)(P->opening + j + 1) * P->slab - z);
             out->D[j][i] = g1 - g0;
             g0 = g1;
+        }
+        if (P->with_e) {
+            float e0 = exp_at(P, (float)P->opening * P->slab - z);
+            for (int j = 0; j < P->nd; j++) {
+                const float e1 = exp_at(P, (float)(P->opening + j + 1) * P->slab - z);
+                out->E[j][i] = e1 - e0;
+                e0 = e1;
+            }
         }
         if (!P->colw) continue;
         const float *c0 = P->colw + (size_t)out->qx[i] * P->bx, *c1 = c0 + P->bx;

@@ -70,6 +70,12 @@ typedef struct vs_place_in {
     float depth_scale;      /* table entries per unit of depth               */
     const float *depth;     /* G(z), depth_n entries (vs_fp_depth)           */
     int depth_n;
+    /* with_e: also the integrals of the depth derivative (post-gs), from
+     * exp(-kappa b^2) at the slab boundaries b (vs_fp_exp) */
+    int with_e;
+    float kappa, exp_scale;
+    const float *exp_table;
+    int exp_n;
     int opening, nd;        /* first sheet, and how many slabs from it       */
     /* the block's column and row factors (vs_block_factors): phase tables
      * of bx and ny entries a row (vs_block_geom colw, roww), or colw NULL
@@ -84,6 +90,7 @@ typedef struct vs_placed {
     int qx[VS_PLACE_BATCH], qy[VS_PLACE_BATCH]; /* phase-table rows                */
     float fx[VS_PLACE_BATCH], fy[VS_PLACE_BATCH];
     float D[VS_MAX_SHEETS_VOXEL][VS_PLACE_BATCH];
+    float E[VS_MAX_SHEETS_VOXEL][VS_PLACE_BATCH]; /* with_e only */
     /* with colw: the whole block's factors, columns (then 8 zeros, which
      * splat_voxel4 may read) and rows, as vs_block_factors computes them */
     float cw[VS_PLACE_BATCH][VS_VOXEL1_MAX + 8];

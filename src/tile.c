@@ -756,23 +756,21 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
 }
 
 /* Depth integrals of a voxel at depth z over the slabs of sheets k0..k1
- * (D, unless NULL), and for gradient splats the integrals of its depth
- * derivative (E): neighbouring slabs share a boundary, so each boundary is
- * looked up once.  Unsheared footprints only (the section centre does not
- * move with depth). */
+ * (D), and for gradient splats the integrals of its depth derivative (E):
+ * neighbouring slabs share a boundary, so each boundary is looked up once.
+ * Unsheared footprints only (the section centre does not move with depth).
+ * place_voxels computes the same for a batch of voxels. */
 static void depth_weights(const vs_footprint *fp, float z, int k0, int k1, int with_e, float *D, float *E)
 {
     const float slab = (float)fp->slab, rz = (float)fp->rz, kap = (float)fp->kappa;
     float b = (float)k0 * slab - z;
-    float g0 = D ? vs_fp_depth(fp, b) : 0.0f, e0 = 0.0f;
+    float g0 = vs_fp_depth(fp, b), e0 = 0.0f;
     if (with_e) e0 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
     for (int k = k0; k <= k1; k++) {
         b = (float)(k + 1) * slab - z;
-        if (D) {
-            float g1 = vs_fp_depth(fp, b);
-            D[k - k0] = g1 - g0;
-            g0 = g1;
-        }
+        float g1 = vs_fp_depth(fp, b);
+        D[k - k0] = g1 - g0;
+        g0 = g1;
         if (with_e) {
             float e1 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
             E[k - k0] = e1 - e0;
@@ -841,6 +839,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                            .rx0 = g->rx0, .ry0 = g->ry0, .phases = (float)VS_BLOCK_PHASES,
                            .ox = t->ox, .oy = t->oy, .slab = slab, .rz = rz,
                            .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
+                           .with_e = pl == VS_PIPELINE_POST_GS, .kappa = (float)F->fp.kappa,
+                           .exp_scale = F->fp.exp_scale, .exp_table = F->fp.exp_table, .exp_n = F->fp.exp_n,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
                            /* the voxel kernels' factors, for blocks they take whole */
                            .colw = !F->sheared_blocks && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX
@@ -938,8 +938,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 /* gradient splats: the block's rows (h, h dx, h dy, h) built
                  * in registers and added to every sheet in one kernel call,
                  * with the weights and offsets the block path uses; the
-                 * depth integrals D come from place_voxels */
-                depth_weights(&F->fp, e->z, opening, kl, 1, NULL, E);
+                 * depth integrals D and E come from place_voxels */
                 float w[4 * VS_MAX_VSPAN];
                 int ns = 0;
                 for (int k = opening; k <= kl; k++) { /* as reached_sheets, with the gradient weights */
@@ -951,7 +950,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                     w[4 * ns] = wD;
                     w[4 * ns + 1] = -2.0f * wD * A;
                     w[4 * ns + 2] = -2.0f * wD * rk;
-                    w[4 * ns + 3] = wv[0] * E[k - opening];
+                    w[4 * ns + 3] = wv[0] * pv.E[k - opening][lane];
                     ns++;
                     merge_box(&bbs[slot], &box);
                 }

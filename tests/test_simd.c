@@ -616,7 +616,7 @@ enum { PL_TW = 70, PL_STRIDE = 9 };
 typedef struct place_fixture {
     unsigned char opaque[PL_TW * PL_TW];
     int sat[(PL_TW + 1) * (PL_TW + 1)];
-    float depth[258];
+    float depth[258], expt[258];
     float colw[(VS_BLOCK_PHASES + 1) * VS_VOXEL1_MAX], roww[(VS_BLOCK_PHASES + 1) * VS_VOXEL1_MAX];
 } place_fixture;
 
@@ -625,10 +625,21 @@ static int place_lane_same(const vs_placed *a, const vs_placed *b, int i, const 
     int same = a->bx[i] == b->bx[i] && a->by[i] == b->by[i] && a->qx[i] == b->qx[i] && a->qy[i] == b->qy[i] &&
                !memcmp(&a->fx[i], &b->fx[i], sizeof(float)) && !memcmp(&a->fy[i], &b->fy[i], sizeof(float));
     for (int j = 0; j < P->nd; j++) same &= !memcmp(&a->D[j][i], &b->D[j][i], sizeof(float));
+    for (int j = 0; P->with_e && j < P->nd; j++) same &= !memcmp(&a->E[j][i], &b->E[j][i], sizeof(float));
     if (P->colw)
         same &= !memcmp(a->cw[i], b->cw[i], (size_t)(P->bx + 8) * sizeof(float)) &&
                 !memcmp(a->rw[i], b->rw[i], (size_t)P->ny * sizeof(float));
     return same;
+}
+
+/* exp(-kappa b^2) by linear interpolation in the fixture's table */
+static float place_exp(const place_fixture *X, const vs_place_in *P, float b)
+{
+    if (!(fabsf(b) < P->rz)) return 0.0f;
+    const float x = P->kappa * b * b * P->exp_scale;
+    if (!(x < (float)(P->exp_n - 1))) return 0.0f;
+    const int i = (int)floorf(x);
+    return X->expt[i] + (x - (float)i) * (X->expt[i + 1] - X->expt[i]);
 }
 
 /* the reference against definitions that share none of its code */
@@ -675,6 +686,8 @@ static int place_truth(const place_fixture *X, const vs_place_in *P, const float
         for (int j = 0; j < P->nd; j++) {
             const float k0 = (float)(P->opening + j) * P->slab, k1 = (float)(P->opening + j + 1) * P->slab;
             bad += vs_fp_depth(&fp, k1 - z) - vs_fp_depth(&fp, k0 - z) != o->D[j][i];
+            if (P->with_e) /* exp(-kappa b^2) from the table, 0 outside the kernel or the table */
+                bad += place_exp(X, P, k1 - z) - place_exp(X, P, k0 - z) != o->E[j][i];
         }
         if (P->colw) {
             float cw[VS_VOXEL1_MAX + 8], rw[VS_VOXEL1_MAX];
@@ -690,7 +703,10 @@ static int place_truth(const place_fixture *X, const vs_place_in *P, const float
 static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
 {
     static place_fixture X;
-    for (int i = 0; i < 258; i++) X.depth[i] = (float)i / 256.0f + 1e-3f * frand(); /* rising, uneven */
+    for (int i = 0; i < 258; i++) {
+        X.depth[i] = (float)i / 256.0f + 1e-3f * frand(); /* rising, uneven */
+        X.expt[i] = expf(-(float)i / 64.0f) + 1e-3f * frand();
+    }
     for (size_t i = 0; i < sizeof X.colw / sizeof *X.colw; i++) {
         X.colw[i] = frand();
         X.roww[i] = frand();
@@ -733,6 +749,13 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
         P.depth = X.depth;
         P.nd = (int)ceilf(2.0f * P.rz / P.slab) + 1;
         P.opening = (int)(40.0f * frand());
+        if (trial % 3 != 2) { /* the derivative integrals; a table that ends inside the kernel or past it */
+            P.with_e = 1;
+            P.kappa = 0.6f + 0.3f * frand();
+            P.exp_n = 257;
+            P.exp_table = X.expt;
+            P.exp_scale = (float)(P.exp_n - 1) / (P.kappa * P.rz * P.rz * (trial % 2 ? 0.8f : 1.05f));
+        }
         if (trial % 2) { /* and the block's factors, 1..8 vectors wide, 1..64 rows */
             P.colw = X.colw;
             P.roww = X.roww;
