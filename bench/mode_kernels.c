@@ -19,7 +19,8 @@ typedef struct kernel_entry {
                  8 gradient-splat block (mixing), 9 project_brick (8n voxels),
                  10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets),
                  12 place_voxels (n voxels in batches of 16),
-                 13 splat_voxel_gs (as splat_voxel4, with the gradient layout) */
+                 13 splat_voxel_gs (as splat_voxel4, with the gradient layout),
+                 14 splat_rows_mix (8 rows of the gradient layout, mixed, into one sheet) */
     void *fn;
 } kernel_entry;
 
@@ -161,6 +162,14 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 ((vs_splat_voxel_gs_fn)k->fn)(d4, w16, 4, BLOCK_DS, ex, ex + 64, dxy, dxy + 24, BLOCK_ROWS,
                                               block_nvec(n), 1e-6f);
             } break;
+            case 14: {
+                static const float dxy[32] = {-3.5f, -2.5f, -1.5f, -0.5f, 0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f,
+                                              7.5f,  8.5f,  9.5f,  10.5f, 11.5f, 0, 0, 0, 0, 0, 0, 0, 0,
+                                              -3.2f, -2.2f, -1.2f, -0.2f, 0.8f, 1.8f, 2.8f, 3.8f};
+                static const float m[12] = {0.5f, 0, 0, 0, -0.3f, 0.01f, 0, 0.02f, -0.3f, 0.1f, -0.05f, 0.04f};
+                ((vs_splat_rows_mix_fn)k->fn)(buf + off, BLOCK_DS, ex, ex + 64, dxy, dxy + 24, BLOCK_ROWS,
+                                              block_nvec(n), 1e-6f, m);
+            } break;
             case 12:
                 for (int b = 0; b < n; b += VS_PLACE_BATCH) {
                     volatile unsigned live = ((vs_place_voxels_fn)k->fn)(
@@ -185,7 +194,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
         double ms = bench_now_ms() - t0;
         if (ms < best) best = ms;
     }
-    double elems = k->kind == 4 || k->kind == 8 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 || k->kind == 11 || k->kind == 13 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS
+    double elems = k->kind == 4 || k->kind == 8 || k->kind == 14 ? 8.0 * block_nvec(n) * BLOCK_ROWS : k->kind == 9 ? 8.0 * n : k->kind == 10 || k->kind == 11 || k->kind == 13 ? 4.0 * 8.0 * block_nvec(n) * BLOCK_ROWS
                                                                                : n;
     return best * 1e6 / ((double)reps * elems);
 }
@@ -246,6 +255,8 @@ int bench_kernels(const bench_opts *o)
         {"splat_voxel4", VS_ISA_AVX2, 11, (void *)vs_splat_voxel4_avx2},
         {"splat_voxel_gs", VS_ISA_SCALAR, 13, (void *)vs_splat_voxel_gs_scalar},
         {"splat_voxel_gs", VS_ISA_AVX2, 13, (void *)vs_splat_voxel_gs_avx2},
+        {"splat_rows_mix", VS_ISA_SCALAR, 14, (void *)vs_splat_rows_mix_scalar},
+        {"splat_rows_mix", VS_ISA_AVX2, 14, (void *)vs_splat_rows_mix_avx2},
         {"project_brick", VS_ISA_SCALAR, 9, (void *)vs_project_brick_scalar},
         {"project_brick", VS_ISA_AVX2, 9, (void *)vs_project_brick_avx2},
         {"project_brick", VS_ISA_AVX512, 9, (void *)vs_project_brick_avx512},
@@ -277,7 +288,7 @@ int bench_kernels(const bench_opts *o)
     FILE *csv = bench_results_dir(o) == 0 ? bench_result_open(o, "kernels.csv") : NULL;
     if (csv) fprintf(csv, "kernel,isa,n,ns_per_element,speedup_vs_scalar\n");
     printf("kernel           isa      n=9 ns/elem  x scalar   n=64 ns/elem  x scalar"
-           "   (splat_block, splat_block_mix: 8 rows of 8 / 64 floats)\n");
+           "   (splat_block, splat_block_mix, splat_rows_mix: 8 rows of 8 / 64 floats)\n");
     double scalar_ns[2] = {0, 0};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         const kernel_entry *k = &all[i];

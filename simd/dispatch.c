@@ -36,6 +36,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->splat_voxel1 = vs_splat_voxel1_scalar;
     k->splat_voxel4 = vs_splat_voxel4_scalar;
     k->splat_voxel_gs = vs_splat_voxel_gs_scalar;
+    k->splat_rows_mix = vs_splat_rows_mix_scalar;
     k->place_voxels = vs_place_voxels_scalar;
 #if defined(__x86_64__) || defined(__i386__)
     if (cap >= VS_ISA_SSE4) {
@@ -59,6 +60,7 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->splat_voxel1 = vs_splat_voxel1_avx2;
         k->splat_voxel4 = vs_splat_voxel4_avx2;     /* also for avx512 */
         k->splat_voxel_gs = vs_splat_voxel_gs_avx2; /* also for avx512 */
+        k->splat_rows_mix = vs_splat_rows_mix_avx2; /* also for avx512 */
         k->place_voxels = vs_place_voxels_avx2;
     }
     if (cap >= VS_ISA_AVX512) {

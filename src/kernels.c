@@ -232,6 +232,19 @@ void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff
     }
 }
 
+void vs_splat_rows_mix_scalar(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                              const float *dy, int rows, int nvec, float thr, const float m[12])
+{
+    const int n = 2 * nvec;
+    for (int r = 0; r < rows; r++) {
+        float *d = dst + r * ds;
+        for (int p = 0; p < n; p++) { /* vs_block_build_skewed's layout, then splat_block_mix */
+            const float v = cw[p] * rw[r], h = v > thr ? v : 0.0f, hx = h * dx[p], hy = h * dy[r];
+            for (int c = 0; c < 4; c++) d[4 * p + c] += (m[3 * c] * h + m[3 * c + 1] * hx) + m[3 * c + 2] * hy;
+        }
+    }
+}
+
 /* G(z) as src/footprint.h's vs_fp_depth */
 static inline float depth_at(const vs_place_in *P, float z)
 {

@@ -164,6 +164,15 @@ typedef struct vs_kernels {
      * memory); cw and dx must be readable up to a multiple of 8 floats */
     void (*splat_voxel_gs)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                            const float *dx, const float *dy, int rows, int nvec, float thr);
+    /* one gradient-splat section of a sheared footprint whose rows share
+     * one column phase (post-gs; splat_block_mix on the block that
+     * vs_block_build_skewed builds, without the block in memory): pixel p
+     * of row r has h = cw[p] rw[r] (0 where not > thr), hx = h dx[p],
+     * hy = h dy[r], and
+     *   dst[r ds + 4p + c] += (m[3c] h + m[3c+1] hx) + m[3c+2] hy,  c < 4, p < 2 nvec
+     * cw and dx must be readable up to a multiple of 8 floats */
+    void (*splat_rows_mix)(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                           const float *dy, int rows, int nvec, float thr, const float m[12]);
     /* activation of n (<= VS_PLACE_BATCH) voxels whose centres x, y, z lie
      * at xyz[i stride ..]: bit i of the result is set unless voxel i is
      * occluded (P->sat: every tile pixel within pad of its centre opaque,
@@ -215,6 +224,12 @@ void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff
                               const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr);
 void vs_splat_voxel_gs_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                             const float *dx, const float *dy, int rows, int nvec, float thr);
+typedef void (*vs_splat_rows_mix_fn)(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                                     const float *dy, int rows, int nvec, float thr, const float m[12]);
+void vs_splat_rows_mix_scalar(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                              const float *dy, int rows, int nvec, float thr, const float m[12]);
+void vs_splat_rows_mix_avx2(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                            const float *dy, int rows, int nvec, float thr, const float m[12]);
 typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);

@@ -242,10 +242,11 @@ typedef struct unskewed_cols {
     int bx;     /* buffer column of block pixel 0 */
     int v0, v1; /* the block's vectors inside the buffer (none: v0 >= v1) */
     float cw[VS_VOXEL1_MAX + 8];
+    float dx[VS_VOXEL1_MAX + 8]; /* post-gs: the columns' offsets from cx */
 } unskewed_cols;
 
 /* 0 when the block is too wide for the fused kernels. */
-static int unskewed_place_cols(const tile_ctx *t, const vs_block_geom *g, const vs_block_place *p, int ch,
+static int unskewed_place_cols(const tile_ctx *t, const vs_block_geom *g, const vs_block_place *p, float cx, int ch,
                                unskewed_cols *uc)
 {
     const int ppv = 8 / ch, nvec = (g->nx * ch + 7) / 8;
@@ -261,11 +262,33 @@ static int unskewed_place_cols(const tile_ctx *t, const vs_block_geom *g, const 
     /* splat_voxel4 reads cw up to a multiple of 8 floats: defined zeros
      * past the factors (not the whole array: this runs per section) */
     if (ch == 4) memset(uc->cw + n, 0, 8 * sizeof(float));
+    if (t->F->pipeline == VS_PIPELINE_POST_GS) { /* as vs_block_build_skewed's gradient layout */
+        for (int i = 0; i < n; i++) uc->dx[i] = (float)(p->x + uc->v0 * ppv + i) - cx;
+        memset(uc->dx + n, 0, 8 * sizeof(float));
+    }
     return 1;
 }
 
+/* Post-gs: raster_gs's splats with offsets in pixels (dxs from the centre,
+ * dy) turned into footprint units by `is`, as a matrix taking a pixel's
+ * (h, h dxs, h dy) to its four channels; the row-centre offset is
+ * dxs - row_shift dy:
+ *   q += wD h,  gx += -2 wD A dx,  gy += -2 wD (B dx + k dy),
+ *   gz += h wE - 2 wD (Qzx dxs + Qzy dy) */
+static void gs_mix(const vs_footprint *fp, const section *sec, float w, float m[12])
+{
+    const float wD = w * sec->D, wE = w * sec->E, is = sec->is, rs = fp->row_shift;
+    const float a = -2.0f * wD * fp->A * is, b = -2.0f * wD * fp->B * is, k = -2.0f * wD * fp->row_k * is;
+    const float mm[12] = {wD, 0.0f, 0.0f,
+                          0.0f, a, -a * rs,
+                          0.0f, b, -b * rs + k,
+                          wE, -2.0f * wD * (float)fp->Qzx * is, -2.0f * wD * (float)fp->Qzy * is};
+    memcpy(m, mm, sizeof mm);
+}
+
 static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const vs_block_place *p,
-                                const unskewed_cols *uc, float D, const float w4[4], int ch, float *dst, rect *bb)
+                                const unskewed_cols *uc, const section *sec, const float w4[4], int ch, float *dst,
+                                rect *bb)
 {
     const vs_frame *F = t->F;
     const int ppv = 8 / ch, v0 = uc->v0, v1 = uc->v1, bx = uc->bx;
@@ -275,8 +298,14 @@ static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const
     const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
     float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
     float rw[VS_BLOCK_MAX_SPAN], w[4];
+    const float D = sec->D;
     vs_block_row_factors(g, p, j0, j1, rw);
-    if (ch == 1) {
+    if (F->pipeline == VS_PIPELINE_POST_GS) {
+        float m[12], dy[VS_BLOCK_MAX_SPAN];
+        gs_mix(t->fp, sec, w4[0], m);
+        for (int j = j0; j < j1; j++) dy[j - j0] = (float)(p->y + j) - sec->cy;
+        F->kern.splat_rows_mix(d, ds, uc->cw, rw, uc->dx, dy, j1 - j0, v1 - v0, g->thr, m);
+    } else if (ch == 1) {
         w[0] = w4[0] * D;
         F->kern.splat_voxel1(&d, w, 1, ds, uc->cw, rw, j1 - j0, v1 - v0, g->thr);
     } else {
@@ -305,11 +334,11 @@ static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4
     }
     if (uc->g != g || !(uc->cx == sec->cx)) {
         uc->g = NULL;
-        if (!unskewed_place_cols(t, g, &p, ch, uc)) return 0;
+        if (!unskewed_place_cols(t, g, &p, sec->cx, ch, uc)) return 0;
         uc->g = g;
         uc->cx = sec->cx;
     }
-    unskewed_splat_rows(t, g, &p, uc, sec->D, w4, ch, dst, bb);
+    unskewed_splat_rows(t, g, &p, uc, sec, w4, ch, dst, bb);
     return 1;
 }
 
@@ -325,7 +354,7 @@ static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[
     const vs_frame *F = t->F;
     const vs_block_geom *g = sec->g;
     const int ppv = 8 / ch, bs = 8 * F->skew_maxvec, gs = F->pipeline == VS_PIPELINE_POST_GS;
-    if (!gs && t->fp->row_shift == 0.0f && raster_unskewed(t, sec, w4, ch, dst, bb, uc)) return;
+    if (t->fp->row_shift == 0.0f && raster_unskewed(t, sec, w4, ch, dst, bb, uc)) return;
     int x, y, nvec;
     vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, gs, F->skew_maxvec, t->blk, &x, &y, &nvec);
     const int by = y - t->oy, bx = x - t->ox;
@@ -338,18 +367,8 @@ static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[
     const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
     const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
     if (gs) {
-        /* raster_gs's splats with offsets in pixels (dxs from the centre,
-         * dy) turned into footprint units by `is`; the row-centre offset
-         * is dxs - row_shift dy:
-         *   q += wD h,  gx += -2 wD A dx,  gy += -2 wD (B dx + k dy),
-         *   gz += h wE - 2 wD (Qzx dxs + Qzy dy) */
-        const vs_footprint *fp = t->fp;
-        const float wD = w4[0] * sec->D, wE = w4[0] * sec->E, is = sec->is, rs = fp->row_shift;
-        const float a = -2.0f * wD * fp->A * is, b = -2.0f * wD * fp->B * is, k = -2.0f * wD * fp->row_k * is;
-        const float m[12] = {wD, 0.0f, 0.0f,
-                             0.0f, a, -a * rs,
-                             0.0f, b, -b * rs + k,
-                             wE, -2.0f * wD * (float)fp->Qzx * is, -2.0f * wD * (float)fp->Qzy * is};
+        float m[12];
+        gs_mix(t->fp, sec, w4[0], m);
         F->kern.splat_block_mix(dst + off, ds, src, bs, j1 - j0, v1 - v0, m);
     } else {
         float w8[8];

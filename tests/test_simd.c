@@ -578,6 +578,70 @@ static void voxel_gs_off(float *const *dst, const float *w, int ns, ptrdiff_t ds
             }
 }
 
+/* splat_rows_mix: 0..9 rows, 1..9 vectors and 32, one destination at
+ * unaligned places, products at and around the threshold, NaN and -0
+ * column factors, offsets of both signs and 0, a matrix with zeros in
+ * its gradient-splat places.  With `fn`, every float of the buffer must
+ * equal the scalar kernel's; without, the scalar kernel must equal the
+ * route it replaces: the gradient layout built into a block (as
+ * vs_block_build_skewed does) and added by splat_block_mix.  Returns the
+ * number of mismatching cases. */
+static int check_rows_mix(const char *isa, vs_splat_rows_mix_fn ref_fn, vs_splat_rows_mix_fn fn)
+{
+    enum { DS = 300, ROWS = 9, NB = 7 * DS * 10 + 400 };
+    static float ref[NB], out[NB], blk[ROWS * 4 * VS_VOXEL1_MAX];
+    float cw[VS_VOXEL1_MAX + 8], dx[VS_VOXEL1_MAX + 8], rw[ROWS], dy[ROWS], m[12];
+    int bad = 0, cases = 0;
+    for (int nvec = 1; nvec <= 10; nvec++)
+        for (int rows = 0; rows <= ROWS; rows++)
+            for (int trial = 0; trial < 3; trial++) {
+                const int nv = nvec == 10 ? VS_VOXEL1_MAX / 2 : nvec, npx = 2 * nv;
+                const float thr = 0.01f;
+                float *dr[1], *dout[1];
+                voxel_case(cw, npx, rw, rows, thr, ref, out, NB, DS, 1, dr, dout);
+                dr[0] += trial;
+                dout[0] += trial;
+                for (int i = 0; i < VS_VOXEL1_MAX + 8; i++) dx[i] = 4.0f * frand(); /* offsets of both signs */
+                if (npx > 3) dx[3] = 0.0f;
+                for (int r = 0; r < rows; r++) dy[r] = 4.0f * frand();
+                for (int i = 0; i < 12; i++) m[i] = trial == 0 && (i == 1 || i == 2 || i == 3 || i == 6) ? 0.0f : frand();
+                if (fn) {
+                    ref_fn(dr[0], DS, cw, rw, dx, dy, rows, nv, thr, m);
+                    fn(dout[0], DS, cw, rw, dx, dy, rows, nv, thr, m);
+                } else {
+                    for (int r = 0; r < rows; r++)
+                        for (int q = 0; q < npx; q++) {
+                            const float v = cw[q] * rw[r], h = v > thr ? v : 0.0f;
+                            float *b = blk + (size_t)r * 4 * npx + 4 * q;
+                            b[0] = h;
+                            b[1] = h * dx[q];
+                            b[2] = h * dy[r];
+                            b[3] = h;
+                        }
+                    vs_splat_block_mix_scalar(dr[0], DS, blk, 4 * npx, rows, nv, m);
+                    ref_fn(dout[0], DS, cw, rw, dx, dy, rows, nv, thr, m);
+                }
+                cases++;
+                if (memcmp(ref, out, sizeof ref)) {
+                    bad++;
+                    if (isa) CHECK(0, "splat_rows_mix %s: %d vectors, %d rows, trial %d differ", isa, nv, rows, trial);
+                }
+            }
+    if (isa) printf("splat_rows_mix %s  bit-identical to %s in %d cases\n", isa, fn ? "scalar" : "the block route", cases);
+    return bad;
+}
+
+/* a deliberately wrong mixed splat: the terms summed in another order */
+static void rows_mix_off(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx, const float *dy,
+                         int rows, int nvec, float thr, const float m[12])
+{
+    for (int r = 0; r < rows; r++)
+        for (int p = 0; p < 2 * nvec; p++) {
+            const float v = cw[p] * rw[r], h = v > thr ? v : 0.0f, hx = h * dx[p], hy = h * dy[r];
+            for (int c = 0; c < 4; c++) dst[r * ds + 4 * p + c] += m[3 * c] * h + (m[3 * c + 1] * hx + m[3 * c + 2] * hy);
+        }
+}
+
 /* a deliberately wrong voxel splat: keeps products equal to the threshold */
 static void voxel1_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                        int rows, int nvec, float thr)
@@ -817,7 +881,7 @@ static void check_dispatch(void)
               vs_isa_name(want));
         CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.splat_block_mix &&
                   k.classify_cd && k.classify_gs && k.shade_lut && k.splat_voxel1 && k.splat_voxel4 &&
-                  k.splat_voxel_gs && k.project_brick && k.place_voxels,
+                  k.splat_voxel_gs && k.splat_rows_mix && k.project_brick && k.place_voxels,
               "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
     }
@@ -848,6 +912,9 @@ int main(void)
     check_voxel_gs("scalar", vs_splat_voxel_gs_scalar, NULL);
     CHECK(check_voxel_gs(NULL, vs_splat_voxel_gs_scalar, voxel_gs_off),
           "check_voxel_gs cannot tell a wrong kernel from the reference");
+    check_rows_mix("scalar", vs_splat_rows_mix_scalar, NULL);
+    CHECK(check_rows_mix(NULL, vs_splat_rows_mix_scalar, rows_mix_off),
+          "check_rows_mix cannot tell a wrong kernel from the reference");
     CHECK(check_place(NULL, vs_place_voxels_scalar, 1) == 0,
           "place_voxels scalar reference disagrees with the brute-force occlusion, vs_block_place_at or vs_fp_depth");
     CHECK(check_place(NULL, place_off, 0) > 0, "check_place cannot tell a wrong kernel from the reference");
@@ -872,6 +939,7 @@ int main(void)
         check_voxel("avx2", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx2);
         check_voxel("avx2", 4, vs_splat_voxel4_scalar, vs_splat_voxel4_avx2);
         check_voxel_gs("avx2", vs_splat_voxel_gs_scalar, vs_splat_voxel_gs_avx2);
+        check_rows_mix("avx2", vs_splat_rows_mix_scalar, vs_splat_rows_mix_avx2);
         check_place("avx2", vs_place_voxels_avx2, 0);
     } else {
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
