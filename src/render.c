@@ -272,10 +272,10 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
              * each section added to its sheet of the ring at once, instead
              * of an active list walked and tested sheet by sheet (CT head,
              * 2 threads: post-cd 179 -> 168 ms, post-alpha 272 -> 256 ms,
-             * pre the same; post-gs, whose sections each build a block, lost
-             * more to the coarser culling than it saved: 418 -> 430 ms) */
-            F.sheared_blocks = F.use_skewed && F.fp.sheared && F.fp.B == 0.0f && vspan <= VS_MAX_VSPAN &&
-                               s->pipeline != VS_PIPELINE_POST_GS;
+             * pre the same; post-gs lost more to the coarser culling than it
+             * saved while each section built a block, 418 -> 430 ms, and
+             * gains since splat_rows_mix builds none: 1 thread 517 -> 469 ms) */
+            F.sheared_blocks = F.use_skewed && F.fp.sheared && F.fp.B == 0.0f && vspan <= VS_MAX_VSPAN;
             F.use_blocks = F.sheared_blocks;
         }
     }
