@@ -419,12 +419,13 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
  * the occlusion test of Mueller et al. [22], we test the footprint's whole
  * extent (plus the one-pixel seam the central differences read): a voxel is
  * culled only if every pixel of the tile it can affect is opaque.  A
- * summed-area table of the tile's opaque pixels answers that in O(1). */
-static void build_sat(const tile_ctx *t, const float *acc, float thr, int *sat)
+ * summed-area table of the tile's opaque pixels answers that in O(1); it is
+ * rebuilt from row `from` on, the first whose opaque pixels changed. */
+static void build_sat(const tile_ctx *t, const float *acc, float thr, int *sat, int from)
 {
     int w = t->tw + 1;
     for (int x = 0; x < w; x++) sat[x] = 0;
-    for (int y = 0; y < t->th; y++) {
+    for (int y = from; y < t->th; y++) {
         int run = 0;
         sat[(y + 1) * w] = 0;
         for (int x = 0; x < t->tw; x++) {
@@ -1247,7 +1248,8 @@ void vs_tile_render(void *arg, int worker, int task)
     float *sheets = NULL;
     float **ring = NULL;
     rect *bbox = NULL;
-    int opaque = 0, opaque_in_sat = 0;
+    int opaque = 0;
+    int sat_from = 1 << 30; /* first tile row whose opaque pixels changed since the table was built */
     tile_state ts;
     memset(&ts, 0, sizeof ts);
     ts.t = &t;
@@ -1441,12 +1443,17 @@ void vs_tile_render(void *arg, int worker, int task)
             for (int y = sp.y0; y < sp.y1; y++) {
                 if (sp.xa[y] == sp.xb[y]) continue;
                 int o = (y - 1) * t.tw + (sp.xa[y] - 1);
-                opaque += F->kern.composite(acc + 4 * o, sb.alpha + o, sb.g + 3 * o, sp.xb[y] - sp.xa[y], thr);
+                const int crossed = F->kern.composite(acc + 4 * o, sb.alpha + o, sb.g + 3 * o, sp.xb[y] - sp.xa[y], thr);
+                if (crossed) {
+                    opaque += crossed;
+                    if (y - 1 < sat_from) sat_from = y - 1;
+                }
                 if (s->occlusion) shrink_live(&t, acc, y - 1, live0, live1);
             }
-            if (s->occlusion && opaque != opaque_in_sat) {
-                build_sat(&t, acc, thr, sat);
-                opaque_in_sat = opaque;
+            if (s->occlusion && sat_from < t.th) {
+                /* rows above the first changed one keep their sums */
+                build_sat(&t, acc, thr, sat, sat_from);
+                sat_from = 1 << 30;
             }
             double t3 = vs_now_ms();
             ws->ms_gradient += t1 - t0;
