@@ -71,15 +71,20 @@ int vs_block_setup(vs_block_geom *g, const vs_footprint *fp, int ch, int grad);
 int vs_block_setup_skewed(vs_block_geom *g, const vs_footprint *fp);
 void vs_block_free(vs_block_geom *g);
 
+/* How far the block's first pixel `first` (the ceiling of c - r0) lies
+ * past the block's left (top) edge c - r0: vs_block_place_at's ux (uy). */
+static inline float vs_block_phase(float c, float r0, int first)
+{
+    return (float)first - (c - r0);
+}
+
 /* The block of a voxel centred at image position (cx, cy). */
 static inline void vs_block_place_at(const vs_block_geom *g, float cx, float cy, vs_block_place *p)
 {
-    float lx = cx - g->rx0, ly = cy - g->ry0;
-    float ax = (float)vs_iceil(lx), ay = (float)vs_iceil(ly);
-    p->x = (int)ax;
-    p->y = (int)ay;
-    p->ux = ax - lx;
-    p->uy = ay - ly;
+    p->x = vs_iceil(cx - g->rx0);
+    p->y = vs_iceil(cy - g->ry0);
+    p->ux = vs_block_phase(cx, g->rx0, p->x);
+    p->uy = vs_block_phase(cy, g->ry0, p->y);
     float sx = p->ux * (float)VS_BLOCK_PHASES, sy = p->uy * (float)VS_BLOCK_PHASES;
     p->qx = (int)sx;
     p->qy = (int)sy;

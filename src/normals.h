@@ -39,7 +39,6 @@ typedef struct vs_shade_lut {
 vs_status vs_shade_lut_setup(vs_context *ctx, int nl, const vs_light *light, vs_shade_lut *lut);
 void vs_shade_lut_free(vs_shade_lut *lut);
 
-/* Shade a gradient (eye frame, any scale) through the tables. */
 /* The first step of vs_shade_lut_eval: the gradient quantised to signed
  * bytes, as the (gy, gx) cell of lambda_bin and radius (returned) and the
  * gz row of phi_bin (*zrow).  Split out so that a batch can issue each
@@ -67,6 +66,7 @@ static inline int vs_shade_lut_cell(float gx, float gy, float gz, int *zrow)
     return (iy + 127) * 255 + (ix + 127);
 }
 
+/* Shade a gradient (eye frame, any scale) through the tables. */
 static inline void vs_shade_lut_eval(const vs_shade_lut *lut, float gx, float gy, float gz,
                                      float *diffuse, float *specular)
 {

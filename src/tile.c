@@ -347,7 +347,9 @@ static int raster_unskewed(const tile_ctx *t, const section *sec, const float w4
  * weights (pre, post-alpha), or for post-gs (h, h dx, h dy, h) mixed into
  * density and gradient splats by splat_block_mix.  Only the rows inside the
  * buffer and the vectors overlapping it are added; a vector may spill into
- * the apron.  uc: as for raster_unskewed (NULL: nothing to share). */
+ * the apron.  Footprints whose rows share one column phase (row_shift 0)
+ * go through raster_unskewed instead unless too wide for its kernels.
+ * uc: as for raster_unskewed (NULL: nothing to share). */
 static void raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], int ch, float *dst, rect *bb,
                           unskewed_cols *uc)
 {
@@ -424,7 +426,8 @@ static void raster_gs(const tile_ctx *t, const section *sec, float w, float *buf
 static void build_sat(const tile_ctx *t, const float *acc, float thr, int *sat, int from)
 {
     int w = t->tw + 1;
-    for (int x = 0; x < w; x++) sat[x] = 0;
+    if (from == 0)
+        for (int x = 0; x < w; x++) sat[x] = 0;
     for (int y = from; y < t->th; y++) {
         int run = 0;
         sat[(y + 1) * w] = 0;
@@ -845,7 +848,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
     for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) slots[j] = (opening + j - kbase) % R;
     const char *vdata = F->vol->data;
     const size_t vsize = vs_type_size(F->vol->type);
-    const ptrdiff_t plane_bytes = (ptrdiff_t)vsize * F->vol->dims[0] * F->vol->dims[1];
+    const size_t plane = (size_t)F->vol->dims[0] * (size_t)F->vol->dims[1], nvox = plane * (size_t)F->vol->dims[2];
     const int pre_shaded = pl == VS_PIPELINE_PRE || pl == VS_PIPELINE_POST_ALPHA;
     pend_bucket *bk = &ts->bk[opening - ts->kmin];
     /* occlusion test, placement and depth integrals a batch of voxels at a
@@ -853,19 +856,19 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
      * sheet is activated, so batching culls exactly what one by one did */
     const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
     const int nd = F->fp.vspan; /* sheets one kernel can reach */
+    /* the voxel kernels' factors, for blocks they take whole */
+    const float *colw = !F->sheared_blocks && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX ? g->colw : NULL;
     const vs_place_in P = {.sat = F->s->occlusion && *ts->opaque > 0 ? ts->sat : NULL,
                            .tx0 = t->x0, .ty0 = t->y0, .tw = t->tw, .th = t->th,
                            .pad_x = (float)F->pad_x, .pad_y = (float)F->pad_y,
                            .rx0 = g->rx0, .ry0 = g->ry0, .phases = (float)VS_BLOCK_PHASES,
                            .ox = t->ox, .oy = t->oy, .slab = slab, .rz = rz,
                            .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
-                           .with_e = pl == VS_PIPELINE_POST_GS, .kappa = (float)F->fp.kappa,
+                           /* E is read only where the factors are (splat_voxel_gs) */
+                           .with_e = pl == VS_PIPELINE_POST_GS && colw, .kappa = (float)F->fp.kappa,
                            .exp_scale = F->fp.exp_scale, .exp_table = F->fp.exp_table, .exp_n = F->fp.exp_n,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
-                           /* the voxel kernels' factors, for blocks they take whole */
-                           .colw = !F->sheared_blocks && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX
-                                       ? g->colw
-                                       : NULL,
+                           .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
     vs_placed pv;
     for (int i0 = 0; i0 < bk->n; i0 += VS_PLACE_BATCH) {
@@ -875,9 +878,9 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
         for (int l = 0; l < nb; l++) __builtin_prefetch(vdata + (size_t)bk->p[i0 + l].v * vsize);
         if (pre_shaded) /* and the neighbours its gradient reads in the planes before and after */
             for (int l = 0; l < nb; l++) {
-                const char *c = vdata + (size_t)bk->p[i0 + l].v * vsize;
-                __builtin_prefetch(c - plane_bytes);
-                __builtin_prefetch(c + plane_bytes);
+                const size_t v = bk->p[i0 + l].v;
+                if (v >= plane) __builtin_prefetch(vdata + (v - plane) * vsize);
+                if (v + plane < nvox) __builtin_prefetch(vdata + (v + plane) * vsize);
             }
         unsigned live = F->kern.place_voxels(&bk->p[i0].x, (int)(sizeof(pend) / sizeof(float)), nb, &P, &pv);
         ts->ws->culled += (uint64_t)(nb - __builtin_popcount(live));
@@ -953,7 +956,6 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 F->kern.splat_voxel4(dst, w, ns, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
                 continue;
             }
-            float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
             if (pl == VS_PIPELINE_POST_GS && P.colw && 2 * (v1 - v0) <= VS_VOXEL1_MAX) {
                 /* gradient splats: the block's rows (h, h dx, h dy, h) built
                  * in registers and added to every sheet in one kernel call,
@@ -979,7 +981,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                  * i + ux - rx0 away, row j lies j + uy - ry0 away, ux and uy
                  * as vs_block_place_at computes them */
                 float dx[VS_VOXEL1_MAX + 8], dy[VS_BLOCK_MAX_SPAN];
-                const float ux = ((float)pl_.x - (e->x - g->rx0)) - g->rx0, uy = ((float)pl_.y - (e->y - g->ry0)) - g->ry0;
+                const float ux = vs_block_phase(e->x, g->rx0, pl_.x) - g->rx0,
+                            uy = vs_block_phase(e->y, g->ry0, pl_.y) - g->ry0;
                 const int np = (v1 - v0) * ppv;
                 for (int i = 0; i < np; i++) dx[i] = (float)(v0 * ppv + i) + ux;
                 for (int i = np; i < np + 8; i++) dx[i] = 0.0f; /* read up to a multiple of 8 */
@@ -987,6 +990,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 F->kern.splat_voxel_gs(dst, w, ns, ds, cw, rw, dx, dy, j1 - j0, v1 - v0, g->thr);
                 continue;
             }
+            float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
             depth_weights(&F->fp, e->z, opening, kl, pl == VS_PIPELINE_POST_GS, D, E);
             vs_block_place_at(g, e->x, e->y, &pl_); /* the gradient layout needs the phases too */
             vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
