@@ -677,6 +677,44 @@ static void test_skewed_tables(void)
     vs_volume_release(v);
 }
 
+/* Post-gs with an unskewed footprint: src/tile.c adds a section with
+ * splat_rows_mix from the block's column and row factors and each pixel's
+ * offset from the centre, instead of the gradient block that
+ * vs_block_build_skewed builds and splat_block_mix adds; the two must give
+ * the same floats for any mixing matrix. */
+static int gs_unskewed_same(const vs_block_geom *g, float row_shift, float cx, float cy, unsigned seed)
+{
+    const int maxvec = vs_block_skewed_nvec(g, row_shift, 4), nv = (g->nx * 4 + 7) / 8, npx = 2 * nv;
+    if (npx > VS_VOXEL1_MAX) return 1; /* src/tile.c takes the block then */
+    const size_t bs = (size_t)8 * maxvec;
+    float *blk = malloc((size_t)g->ny * bs * sizeof(float));
+    float *a = calloc((size_t)g->ny * bs, sizeof(float)), *b = calloc((size_t)g->ny * bs, sizeof(float));
+    float m[12], cw[VS_VOXEL1_MAX + 8] = {0}, dx[VS_VOXEL1_MAX + 8] = {0}, rw[VS_BLOCK_MAX_SPAN], dy[VS_BLOCK_MAX_SPAN];
+    int same = blk && a && b;
+    for (int i = 0; i < 12; i++) {
+        seed = seed * 1664525u + 1013904223u;
+        m[i] = (float)(seed >> 8) / 8388608.0f - 1.0f;
+    }
+    if (same) {
+        int x, y, n;
+        vs_block_build_skewed(g, row_shift, cx, cy, 4, 1, maxvec, blk, &x, &y, &n);
+        vs_splat_block_mix_scalar(a, (ptrdiff_t)bs, blk, (ptrdiff_t)bs, g->ny, n, m);
+        vs_block_place p;
+        vs_block_place_at(g, cx, cy, &p);
+        same = p.x == x && p.y == y && n == nv;
+        vs_block_col_factors(g, &p, 0, npx, cw);
+        vs_block_row_factors(g, &p, 0, g->ny, rw);
+        for (int i = 0; i < npx; i++) dx[i] = (float)(p.x + i) - cx;
+        for (int j = 0; j < g->ny; j++) dy[j] = (float)(p.y + j) - cy;
+        vs_splat_rows_mix_scalar(b, (ptrdiff_t)bs, cw, rw, dx, dy, g->ny, nv, g->thr, m);
+        same &= !memcmp(a, b, (size_t)g->ny * bs * sizeof(float));
+    }
+    free(blk);
+    free(a);
+    free(b);
+    return same;
+}
+
 /* Skewed blocks (src/block.h) against the footprint they tabulate:
  * b-less weight exp(-(A dx^2 + 2 B dx dy + C dy^2)) inside the kernel's
  * radius, 0 outside, for sheared and rotated ellipses at several scales
@@ -770,6 +808,9 @@ static void test_skewed_blocks(void)
                           s.azimuth, s.elevation, scales[si]);
                     unskewed_checked++;
                     free(sheet);
+                    CHECK(gs_unskewed_same(&g, f.row_shift, cx, cy, seed),
+                          "view %g,%g scale %.1f: post-gs through splat_rows_mix differs from the gradient block",
+                          s.azimuth, s.elevation, scales[si]);
                 }
             }
             printf("skewed block, view %g,%g, scale %.1f (B %.3g, row shift %.3f, %dx%d): max error %.2e, "
