@@ -507,6 +507,23 @@ static int check_voxel(const char *isa, int ch, vs_splat_voxel1_fn ref_fn, vs_sp
     return bad;
 }
 
+/* The gradient-splat layout (h, h dx, h dy, h) of rows x npx pixels
+ * built into a block in memory, as src/block.c builds it: the route the
+ * fused gradient kernels replace. */
+static void gs_layout_block(float *blk, const float *cw, const float *rw, const float *dx, const float *dy, int rows,
+                            int npx, float thr)
+{
+    for (int r = 0; r < rows; r++)
+        for (int q = 0; q < npx; q++) {
+            const float v = cw[q] * rw[r], h = v > thr ? v : 0.0f;
+            float *b = blk + (size_t)r * 4 * npx + 4 * q;
+            b[0] = h;
+            b[1] = h * dx[q];
+            b[2] = h * dy[r];
+            b[3] = h;
+        }
+}
+
 /* splat_voxel_gs: 0..9 rows, 1..9 vectors and 32 (four-vector groups and
  * their tails, the widest row), 0..6 sheets at distinct unaligned places,
  * products at and around the threshold, NaN and -0 column factors, offsets
@@ -537,15 +554,7 @@ static int check_voxel_gs(const char *isa, vs_splat_voxel_gs_fn ref_fn, vs_splat
                     ref_fn(dr, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
                     fn(dout, w, ns, DS, cw, rw, dx, dy, rows, nv, thr);
                 } else {
-                    for (int r = 0; r < rows; r++)
-                        for (int q = 0; q < npx; q++) {
-                            const float v = cw[q] * rw[r], h = v > thr ? v : 0.0f;
-                            float *b = blk + (size_t)r * 4 * npx + 4 * q;
-                            b[0] = h;
-                            b[1] = h * dx[q];
-                            b[2] = h * dy[r];
-                            b[3] = h;
-                        }
+                    gs_layout_block(blk, cw, rw, dx, dy, rows, npx, thr);
                     for (int sh = 0; sh < ns; sh++) {
                         const float w8[8] = {w[4 * sh],     w[4 * sh + 1], w[4 * sh + 2], w[4 * sh + 3],
                                              w[4 * sh],     w[4 * sh + 1], w[4 * sh + 2], w[4 * sh + 3]};
@@ -609,15 +618,7 @@ static int check_rows_mix(const char *isa, vs_splat_rows_mix_fn ref_fn, vs_splat
                     ref_fn(dr[0], DS, cw, rw, dx, dy, rows, nv, thr, m);
                     fn(dout[0], DS, cw, rw, dx, dy, rows, nv, thr, m);
                 } else {
-                    for (int r = 0; r < rows; r++)
-                        for (int q = 0; q < npx; q++) {
-                            const float v = cw[q] * rw[r], h = v > thr ? v : 0.0f;
-                            float *b = blk + (size_t)r * 4 * npx + 4 * q;
-                            b[0] = h;
-                            b[1] = h * dx[q];
-                            b[2] = h * dy[r];
-                            b[3] = h;
-                        }
+                    gs_layout_block(blk, cw, rw, dx, dy, rows, npx, thr);
                     vs_splat_block_mix_scalar(dr[0], DS, blk, 4 * npx, rows, nv, m);
                     ref_fn(dout[0], DS, cw, rw, dx, dy, rows, nv, thr, m);
                 }
