@@ -168,7 +168,6 @@ void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, fl
                 }
             }
         }
-        if (grad && ch == 4) gradient_layout(blk, stride, g->ny, width, xmin, (int)py, cx, cy);
         return;
     }
     for (int j = 0; j < g->ny; j++) {

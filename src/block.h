@@ -104,12 +104,12 @@ void vs_block_build(const vs_block_geom *g, const vs_block_place *p, int j0, int
  * rows from them in registers, vs_block_build into memory). */
 void vs_block_factors(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, int v0, int v1, float *cw,
                       float *rw);
-/* The same for vectors of ch floats a pixel whatever g's own layout (the
- * skewed tables serve one- and four-channel sheets). */
 /* The two halves of vs_block_factors_ch: column factors of pixels
  * [i0, i1) into cw[0 ..), row factors of rows [j0, j1) into rw[0 ..). */
 void vs_block_col_factors(const vs_block_geom *g, const vs_block_place *p, int i0, int i1, float *cw);
 void vs_block_row_factors(const vs_block_geom *g, const vs_block_place *p, int j0, int j1, float *rw);
+/* vs_block_factors for vectors of ch floats a pixel whatever g's own layout
+ * (the skewed tables serve one- and four-channel sheets). */
 void vs_block_factors_ch(const vs_block_geom *g, const vs_block_place *p, int ch, int j0, int j1, int v0, int v1,
                          float *cw, float *rw);
 

@@ -211,19 +211,26 @@ void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
     }
 }
 
+/* One row of the gradient-splat block layout (h, h dx, h dy, h) of src/block.c:
+ * pixel p has h = cw[p] ry (0 where not > thr), p < n. */
+static void gs_layout_row(float *b, const float *cw, float ry, const float *dx, float dy, int n, float thr)
+{
+    for (int p = 0; p < n; p++) {
+        const float v = cw[p] * ry, h = v > thr ? v : 0.0f;
+        b[4 * p] = h;
+        b[4 * p + 1] = h * dx[p];
+        b[4 * p + 2] = h * dy;
+        b[4 * p + 3] = h;
+    }
+}
+
 void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
                               const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr)
 {
     float b[4 * VS_VOXEL1_MAX];
     const int n = 2 * nvec;
     for (int r = 0; r < rows; r++) {
-        for (int p = 0; p < n; p++) { /* vs_block_build's gradient layout */
-            const float v = cw[p] * rw[r], h = v > thr ? v : 0.0f;
-            b[4 * p] = h;
-            b[4 * p + 1] = h * dx[p];
-            b[4 * p + 2] = h * dy[r];
-            b[4 * p + 3] = h;
-        }
+        gs_layout_row(b, cw, rw[r], dx, dy[r], n, thr); /* vs_block_build's row */
         for (int s = 0; s < ns; s++) {
             float *d = dst[s] + r * ds;
             const float *ws = w + 4 * s;
@@ -235,13 +242,10 @@ void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff
 void vs_splat_rows_mix_scalar(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
                               const float *dy, int rows, int nvec, float thr, const float m[12])
 {
-    const int n = 2 * nvec;
-    for (int r = 0; r < rows; r++) {
-        float *d = dst + r * ds;
-        for (int p = 0; p < n; p++) { /* vs_block_build_skewed's layout, then splat_block_mix */
-            const float v = cw[p] * rw[r], h = v > thr ? v : 0.0f, hx = h * dx[p], hy = h * dy[r];
-            for (int c = 0; c < 4; c++) d[4 * p + c] += (m[3 * c] * h + m[3 * c + 1] * hx) + m[3 * c + 2] * hy;
-        }
+    float b[4 * VS_VOXEL1_MAX];
+    for (int r = 0; r < rows; r++) { /* vs_block_build_skewed's row, then splat_block_mix on it */
+        gs_layout_row(b, cw, rw[r], dx, dy[r], 2 * nvec, thr);
+        vs_splat_block_mix_scalar(dst + r * ds, ds, b, 0, 1, nvec, m);
     }
 }
 
@@ -252,7 +256,7 @@ static inline float depth_at(const vs_place_in *P, float z)
 }
 
 /* exp(-kappa b^2) inside the kernel's depth radius, else 0 (as src/tile.c's
- * depth_weights) */
+ * make_section) */
 static inline float exp_at(const vs_place_in *P, float b)
 {
     return fabsf(b) < P->rz ? vs_exp_lookup(P->exp_table, P->exp_n, P->exp_scale, P->kappa * b * b) : 0.0f;

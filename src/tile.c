@@ -778,30 +778,6 @@ static void rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
     }
 }
 
-/* Depth integrals of a voxel at depth z over the slabs of sheets k0..k1
- * (D), and for gradient splats the integrals of its depth derivative (E):
- * neighbouring slabs share a boundary, so each boundary is looked up once.
- * Unsheared footprints only (the section centre does not move with depth).
- * place_voxels computes the same for a batch of voxels. */
-static void depth_weights(const vs_footprint *fp, float z, int k0, int k1, int with_e, float *D, float *E)
-{
-    const float slab = (float)fp->slab, rz = (float)fp->rz, kap = (float)fp->kappa;
-    float b = (float)k0 * slab - z;
-    float g0 = vs_fp_depth(fp, b), e0 = 0.0f;
-    if (with_e) e0 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
-    for (int k = k0; k <= k1; k++) {
-        b = (float)(k + 1) * slab - z;
-        float g1 = vs_fp_depth(fp, b);
-        D[k - k0] = g1 - g0;
-        g0 = g1;
-        if (with_e) {
-            float e1 = fabsf(b) < rz ? vs_fp_exp(fp, kap * b * b) : 0.0f;
-            E[k - k0] = e1 - e0;
-            e0 = e1;
-        }
-    }
-}
-
 /* The sheets opening..kl that a voxel's block reaches with a positive
  * depth integral D[j dstep] (j = k - opening): their destinations (the
  * block's offset `off` in their ring slot) and weights wv[c] D (nc
@@ -864,12 +840,13 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                            .rx0 = g->rx0, .ry0 = g->ry0, .phases = (float)VS_BLOCK_PHASES,
                            .ox = t->ox, .oy = t->oy, .slab = slab, .rz = rz,
                            .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
-                           /* E is read only where the factors are (splat_voxel_gs) */
-                           .with_e = pl == VS_PIPELINE_POST_GS && colw, .kappa = (float)F->fp.kappa,
+                           /* E: post-gs voxels (sheared_blocks sections make their own) */
+                           .with_e = pl == VS_PIPELINE_POST_GS && !F->sheared_blocks, .kappa = (float)F->fp.kappa,
                            .exp_scale = F->fp.exp_scale, .exp_table = F->fp.exp_table, .exp_n = F->fp.exp_n,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
                            .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
+    const sheet_geom unscaled = {g, 1.0f, 1.0f}; /* sheared_blocks: orthographic sections */
     vs_placed pv;
     for (int i0 = 0; i0 < bk->n; i0 += VS_PLACE_BATCH) {
         const int nb = bk->n - i0 < VS_PLACE_BATCH ? bk->n - i0 : VS_PLACE_BATCH;
@@ -898,12 +875,11 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                  * its slab), placed and added as on the sheet-at-a-time
                  * path, into its sheet of the ring */
                 const float *w4 = wvs[lane];
-                const sheet_geom sh = {g, 1.0f, 1.0f};
                 unskewed_cols uc; /* shared by its sections when only y moves */
                 uc.g = NULL;
                 for (int k = opening; k <= kl; k++) {
                     section sec;
-                    if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
+                    if (!make_section(t, &unscaled, e->x, e->y, e->z, k, &sec)) continue;
                     ts->ws->splatted++;
                     const int slot = slots[k - opening];
                     raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot], &uc);
@@ -917,7 +893,8 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
             int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
             if (v1 > g->nvec) v1 = g->nvec;
             if (j0 >= j1 || v0 >= v1) continue;
-            /* the factor paths read only the phase rows and weights */
+            /* the factor paths read only the phase rows and weights; the
+             * gradient layout and the block fallback set the phases too */
             vs_block_place pl_ = {.x = bx + t->ox, .y = by + t->oy, .qx = pv.qx[lane], .qy = pv.qy[lane],
                                   .fx = pv.fx[lane], .fy = pv.fy[lane]};
             /* the factors of the block's part inside the buffer */
@@ -978,8 +955,7 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 }
                 ts->ws->splatted += (uint64_t)ns;
                 /* offsets from the centre (vs_block_build): column i lies
-                 * i + ux - rx0 away, row j lies j + uy - ry0 away, ux and uy
-                 * as vs_block_place_at computes them */
+                 * i + ux - rx0 away, row j lies j + uy - ry0 away */
                 float dx[VS_VOXEL1_MAX + 8], dy[VS_BLOCK_MAX_SPAN];
                 const float ux = vs_block_phase(e->x, g->rx0, pl_.x) - g->rx0,
                             uy = vs_block_phase(e->y, g->ry0, pl_.y) - g->ry0;
@@ -990,14 +966,16 @@ static void activate_sheet(tile_state *ts, int opening, float *const *ring, rect
                 F->kern.splat_voxel_gs(dst, w, ns, ds, cw, rw, dx, dy, j1 - j0, v1 - v0, g->thr);
                 continue;
             }
-            float D[VS_MAX_VSPAN], E[VS_MAX_VSPAN];
-            depth_weights(&F->fp, e->z, opening, kl, pl == VS_PIPELINE_POST_GS, D, E);
-            vs_block_place_at(g, e->x, e->y, &pl_); /* the gradient layout needs the phases too */
+            /* a block too wide for the voxel kernels: built in memory once
+             * (vs_block_place_at's phases, for the gradient layout) and
+             * added to each sheet */
+            pl_.ux = vs_block_phase(e->x, g->rx0, pl_.x);
+            pl_.uy = vs_block_phase(e->y, g->ry0, pl_.y);
             vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
             const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
             for (int k = opening; k <= kl; k++) {
-                const section sec = {e->x, e->y, D[k - opening], pl == VS_PIPELINE_POST_GS ? E[k - opening] : 0.0f,
-                                     1.0f, 1.0f, NULL};
+                const section sec = {e->x, e->y, pv.D[k - opening][lane],
+                                     pl == VS_PIPELINE_POST_GS ? pv.E[k - opening][lane] : 0.0f, 1.0f, 1.0f, NULL};
                 if (!(sec.D > 0.0f)) continue;
                 ts->ws->splatted++;
                 const int slot = slots[k - opening];
