@@ -133,25 +133,6 @@ void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, fl
         lerp(cw, c0, c0 + g->bx, fx, 0, width);
         lerp(rw, r0, r0 + g->ny, fy, 0, g->ny);
         const float thr = g->thr;
-        if (grad && ch == 4) {
-            /* the gradient layout (h, h dx, h dy, h) in the same pass, dx and
-             * dy each pixel's offset from the centre as gradient_layout has it */
-            float dxs[VS_BLOCK_MAX_SPAN + 8];
-            for (int i = 0; i < width; i++) dxs[i] = (float)(xmin + i) - cx;
-            for (int j = 0; j < g->ny; j++) {
-                float *row = blk + (size_t)j * stride;
-                const float ry = rw[j], dy = (float)((int)py + j) - cy;
-                for (int i = 0; i < width; i++) {
-                    float h = cw[i] * ry;
-                    h = h > thr ? h : 0.0f;
-                    row[4 * i] = h;
-                    row[4 * i + 1] = h * dxs[i];
-                    row[4 * i + 2] = h * dy;
-                    row[4 * i + 3] = h;
-                }
-            }
-            return;
-        }
         for (int j = 0; j < g->ny; j++) {
             float *row = blk + (size_t)j * stride;
             const float ry = rw[j];
@@ -168,6 +149,7 @@ void vs_block_build_skewed(const vs_block_geom *g, float row_shift, float cx, fl
                 }
             }
         }
+        if (grad && ch == 4) gradient_layout(blk, stride, g->ny, width, xmin, (int)py, cx, cy);
         return;
     }
     for (int j = 0; j < g->ny; j++) {
