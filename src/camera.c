@@ -1,5 +1,7 @@
 /* Orthographic or perspective camera with the conventions of DESIGN.md §2. */
-#include "internal.h"
+#include "camera.h"
+#include "context.h"
+#include "volume.h"
 
 #include <math.h>
 

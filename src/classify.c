@@ -1,6 +1,8 @@
 /* Classification: iso-range with a linear opacity ramp (the paper's model) or
  * a piecewise-linear 1-D colour/opacity function, tabulated for speed. */
-#include "internal.h"
+#include "classify.h"
+#include "context.h"
+#include "volume.h"
 
 #include <math.h>
 #include <string.h>

@@ -1,6 +1,6 @@
-/* Context lifetime, error reporting, settings defaults and names. */
-#include "internal.h"
-#include "normals.h"
+/* Context lifetime, settings defaults and names. */
+#include "context.h"
+#include "shade_lut.h"
 #include "pool.h"
 #include "relevant.h"
 
@@ -9,7 +9,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 vs_status vs_context_create(vs_context **out)
 {
@@ -27,41 +26,9 @@ void vs_context_release(vs_context *ctx)
     vs_relevant_cache_free(ctx->relevant);
     if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
     free(ctx->shade_lut);
+    vs_tile_scratch_release(ctx->scratch, ctx->nscratch);
     if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */
     free(ctx);
-}
-
-const char *vs_last_error(const vs_context *ctx)
-{
-    if (!ctx) return "no context";
-    return ctx->error;
-}
-
-vs_status vs_set_error(vs_context *ctx, vs_status st, const char *fmt, ...)
-{
-    if (ctx) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(ctx->error, sizeof ctx->error, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
-
-const char *vs_status_string(vs_status s)
-{
-    switch (s) {
-    case VS_OK: return "ok";
-    case VS_ERR_INVALID_ARGUMENT: return "invalid argument";
-    case VS_ERR_IO: return "i/o error";
-    case VS_ERR_FORMAT: return "malformed input";
-    case VS_ERR_OUT_OF_MEMORY: return "out of memory";
-    case VS_ERR_TOO_LARGE: return "too large";
-    case VS_ERR_UNSUPPORTED: return "unsupported";
-    case VS_ERR_CANCELLED: return "cancelled";
-    case VS_ERR_INTERNAL: return "internal error";
-    }
-    return "unknown status";
 }
 
 const char *vs_version(void) { return VS_VERSION_STRING; }
@@ -139,13 +106,6 @@ vs_status vs_isa_parse(const char *name, vs_isa *out)
             return VS_OK;
         }
     return VS_ERR_INVALID_ARGUMENT;
-}
-
-double vs_now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
 void vs_image_free(vs_image *img)

@@ -1,4 +1,6 @@
 /* Kernel geometry and pre-integrated tables for one frame (see footprint.h). */
+#include "gaussian.h"
+#include "context.h"
 #include "footprint.h"
 
 #include <math.h>

@@ -12,7 +12,7 @@
 #ifndef VS_FOOTPRINT_H
 #define VS_FOOTPRINT_H
 
-#include "internal.h"
+#include "camera.h"
 
 /* floor and ceil of a float known to lie well inside int's range (pixel and
  * sheet coordinates): exact, and a few instructions where the baseline

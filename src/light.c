@@ -1,6 +1,7 @@
 /* One directional light, Blinn-Phong, two-sided; shared by every pipeline and
  * the reference ray caster so that their images are comparable. */
-#include "internal.h"
+#include "light.h"
+#include "camera.h"
 
 #include <math.h>
 

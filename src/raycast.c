@@ -10,8 +10,15 @@
  * to the image, like the splatting sheets), so neighbouring rays sample
  * consistently.  Rows are spread over plain pthreads; each pixel
  * is computed independently, so the image is identical for any thread count. */
+#include "raycast.h"
 #include "finish.h"
-#include "internal.h"
+#include "camera.h"
+#include "classify.h"
+#include "context.h"
+#include "gaussian.h"
+#include "light.h"
+#include "timing.h"
+#include "volume.h"
 
 #include <pthread.h>
 #include <stdatomic.h>

@@ -1,5 +1,7 @@
 /* Building the relevant-voxel list: an in-range mask, dilated by the seam
  * width with separable running maxima, then compacted in k, j, i order. */
+#include "timing.h"
+#include "context.h"
 #include "relevant.h"
 #include "pool.h"
 

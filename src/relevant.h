@@ -5,7 +5,8 @@
 #ifndef VS_RELEVANT_H
 #define VS_RELEVANT_H
 
-#include "internal.h"
+#include "classify.h"
+#include "volume.h"
 
 /* Voxels are stored brick by brick (VS_BRICK^3 grid cells) so a frame can
  * project, bin and cull whole bricks before touching their voxels.  A voxel

@@ -1,9 +1,12 @@
 /* vs_render: validate, set up the frame (camera, classification, lighting,
  * kernel tables, relevant voxels), transform and bin the voxels into tiles,
  * run the tiles on the worker pool, and sum the workers' statistics. */
+#include "raycast.h"
+#include "timing.h"
+#include "context.h"
 #include "finish.h"
 #include "pool.h"
-#include "splat.h"
+#include "tile.h"
 
 #include <limits.h>
 #include <math.h>
@@ -65,7 +68,7 @@ static void bin_task(void *arg, int worker, int c)
             }
             /* perspective: a section's centre moves with its sheet's depth,
              * over the depths the kernels reach; voxels whose kernel crosses
-             * the near plane are dropped (src/tile.c), and so is a brick of
+             * the near plane are dropped (src/activate.c), and so is a brick of
              * only such voxels */
             const double rz = F->fp.rz, reach = rz + 0.5 * F->fp.slab; /* sheet middles */
             double zn = lo[2] - reach > cam->near_z ? lo[2] - reach : cam->near_z, box[4];
@@ -197,6 +200,19 @@ static void setup_sheet_tables(vs_frame *F, struct vs_pool *pool, int ch)
     }
 }
 
+/* One tile scratch per worker, kept by the context across frames. */
+static vs_tile_scratch *ensure_scratch(vs_context *ctx, int nthreads)
+{
+    if (ctx->nscratch < nthreads) {
+        vs_tile_scratch *a = realloc(ctx->scratch, (size_t)nthreads * sizeof *a);
+        if (!a) return NULL;
+        memset(a + ctx->nscratch, 0, (size_t)(nthreads - ctx->nscratch) * sizeof *a);
+        ctx->scratch = a;
+        ctx->nscratch = nthreads;
+    }
+    return ctx->scratch;
+}
+
 static void free_frame(vs_frame *F)
 {
     vs_footprint_free(&F->fp);
@@ -220,6 +236,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     memset(&F, 0, sizeof F);
     F.s = s;
     F.pipeline = s->pipeline;
+    F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals);
     for (int i = 0; i < 3; i++) F.spacing[i] = vol->spacing[i];
     vs_status rc;
     float *image = NULL;
@@ -320,11 +337,12 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     F.tile_start = calloc((size_t)F.ntiles + 1, sizeof(uint32_t));
     F.wstats = aligned_alloc(_Alignof(vs_worker_stats), (size_t)nthreads * sizeof *F.wstats);
     if (F.wstats) memset(F.wstats, 0, (size_t)nthreads * sizeof *F.wstats);
+    F.scratch = ensure_scratch(ctx, nthreads);
     image = malloc((size_t)W * H * 4 * sizeof(float));
     J.F = &F;
     J.nchunks = nb < 256 ? 1 : nthreads * 4;
     J.counts = calloc((size_t)J.nchunks * F.ntiles, sizeof(uint32_t));
-    if (!F.bview || !F.tile_start || !F.wstats || !image ||
+    if (!F.bview || !F.tile_start || !F.wstats || !F.scratch || !image ||
         !J.counts) {
         rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory for a %dx%d frame of %zu voxels", W, H, nv);
         goto fail;

@@ -3,7 +3,8 @@
  * carry it (vs_analytic, in voxel-index coordinates) so that the reference
  * ray caster can render ground truth.  All parameters an analytic function
  * needs live in analytic.params: there is no global mutable state. */
-#include "internal.h"
+#include "context.h"
+#include "volume.h"
 
 #include <errno.h>
 #include <math.h>

@@ -1,6 +1,7 @@
 /* Dense typed volumes: allocation with checked sizes, accessors, value range,
  * and the histogram-based default iso-value (Otsu). */
-#include "internal.h"
+#include "volume.h"
+#include "context.h"
 
 #include <float.h>
 #include <stdatomic.h>

@@ -15,7 +15,7 @@
  *  - the shading table with NaN, infinite and tiny gradients.
  * Memory bounds (ulimit -v) are checked by tests/cli_hostile.sh. */
 #include "internal.h"
-#include "normals.h"
+#include "shade_lut.h"
 #include "oiio_adapter.h"
 #include "testutil.h"
 

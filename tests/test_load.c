@@ -748,7 +748,7 @@ static int oiio_mapped(void)
     return found;
 }
 
-/* Image I/O is a module loaded on first use (src/oiio_adapter.h): loading a
+/* Image I/O is a module loaded on first use (src/io/oiio_adapter.h): loading a
  * NIfTI volume and rendering it must not map OpenImageIO (its 260 libraries
  * cost 130 MB and 0.15 s a start); the first image write loads it. */
 static void test_io_module_lazy(vs_context *ctx)

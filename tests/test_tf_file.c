@@ -1,4 +1,4 @@
-/* Transfer-function files (src/tf_file.c): ParaView JSON presets, ImageVis3D
+/* Transfer-function files (src/io/tf_file.c): ParaView JSON presets, ImageVis3D
  * .1dt, vsplat .vtf; the shipped presets; malformed files of every kind give
  * a clear error naming the file, never a crash or an absurd allocation. */
 #include "testutil.h"

@@ -28,7 +28,7 @@ cmake -S "$ROOT" -B "$B" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -
 targets=("$@")
 if [[ ${#targets[@]} -eq 0 ]]; then
     targets=(nifti nrrd den raw stack tar)
-    [[ -f $ROOT/src/tf_file.c ]] && targets+=(tf)
+    [[ -f $ROOT/src/io/tf_file.c ]] && targets+=(tf)
 fi
 cmake --build "$B" -j"$JOBS" --target "${targets[@]/#/fuzz_}" >/dev/null
 

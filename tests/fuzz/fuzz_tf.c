@@ -1,4 +1,4 @@
-/* libFuzzer harness: transfer-function files (src/tf_file.c).  The first
+/* libFuzzer harness: transfer-function files (src/io/tf_file.c).  The first
  * byte picks the format by extension (.json, .1dt, .vtf); a function that
  * loads is then used to render a tiny volume with every pipeline, so its
  * points must be what vs_render accepts (or be refused with a status). */

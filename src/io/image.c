@@ -1,5 +1,5 @@
 /* Image files (through the OpenImageIO adapter) and image comparison. */
-#include "internal.h"
+#include "context.h"
 #include "oiio_adapter.h"
 
 #include <math.h>

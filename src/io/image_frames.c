@@ -1,6 +1,6 @@
 /* Multi-frame image files (animated GIF, multi-page TIFF) through the
  * OpenImageIO adapter: vs_image_write_frames. */
-#include "internal.h"
+#include "context.h"
 #include "oiio_adapter.h"
 
 #include <stdlib.h>

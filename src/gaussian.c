@@ -5,7 +5,7 @@
  * integrate to one:  b = 1 / ( sqrt(pi/a) erf(sqrt(a) R) * (pi/a)(1-e^{-aR^2}) ),
  * a = 2 ln 2.  For R = 2: b = 0.29453 (the untruncated value is 0.29313; the
  * paper's 0.214 does not normalise this kernel). */
-#include "internal.h"
+#include "gaussian.h"
 
 #include <math.h>
 

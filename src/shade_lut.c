@@ -1,5 +1,6 @@
 /* Building the Clyne-Dennis tables and the angle-indexed shading table. */
-#include "normals.h"
+#include "context.h"
+#include "shade_lut.h"
 
 #include <math.h>
 #include <stdlib.h>

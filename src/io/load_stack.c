@@ -13,7 +13,9 @@
  * for ImageJ files (ImageJ's default depth) and the mean x/y spacing for other
  * TIFFs (their z unit is unknown, so assume cubic voxels).  Without a
  * resolution: 1,1,1. */
+#include "context.h"
 #include "load.h"
+#include "load_common.h"
 #include "oiio_adapter.h"
 
 #include <ctype.h>

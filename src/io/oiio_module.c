@@ -1,8 +1,8 @@
-/* Loading the OpenImageIO adapter module (src/oiio_adapter.h says why it is
+/* Loading the OpenImageIO adapter module (src/io/oiio_adapter.h says why it is
  * a module).  The handle lives in the context, like every other cache; the
  * module is opened RTLD_NODELETE because OpenImageIO keeps threads and
  * static objects that must outlive any dlclose. */
-#include "internal.h"
+#include "context.h"
 #include "oiio_adapter.h"
 
 #include <dlfcn.h>

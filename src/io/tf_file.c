@@ -34,7 +34,8 @@
  * the line (text formats), line and column (JSON syntax) or JSON element.
  * Files are capped at TF_MAX_FILE bytes and results at TF_MAX_POINTS points,
  * checked before anything is allocated for them. */
-#include "internal.h"
+#include "context.h"
+#include "volume.h"
 
 #include <cJSON.h>
 #include <ctype.h>

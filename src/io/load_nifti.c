@@ -10,7 +10,9 @@
  * data into f32 = slope*v + inter.  Only the first 3-D volume of a 4-D+ file
  * is read.  Spacing is |pixdim[1..3]| as stored: 0 or NaN on an axis with
  * more than one voxel is an error (niftiio would silently make it 1). */
+#include "context.h"
 #include "load.h"
+#include "load_common.h"
 
 #include <errno.h>
 #include <math.h>

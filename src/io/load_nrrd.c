@@ -3,7 +3,9 @@
  * then the whole file is loaded.  uchar/short/ushort/float keep their type,
  * other scalar types become f32.  Spacing per axis from nrrdSpacingCalculate
  * (axis spacing, or the length of the space direction), else 1. */
+#include "context.h"
 #include "load.h"
+#include "load_common.h"
 
 #include <math.h>
 #include <stdio.h>

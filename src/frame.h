@@ -1,12 +1,12 @@
 /* One splatting frame: everything the per-tile sheet loop reads, built once
  * per vs_render call and shared read-only by the workers. */
-#ifndef VS_SPLAT_H
-#define VS_SPLAT_H
+#ifndef VS_FRAME_H
+#define VS_FRAME_H
 
 #include "block.h"
 #include "footprint.h"
 #include "kernels.h"
-#include "normals.h"
+#include "shade_lut.h"
 #include "relevant.h"
 
 #include <stdatomic.h>
@@ -70,6 +70,9 @@ typedef struct vs_frame {
     atomic_int error;                /* a worker ran out of memory               */
     atomic_int tiles_done;
     vs_worker_stats *wstats;         /* one per worker                           */
+    struct vs_tile_scratch *scratch; /* one per worker, the context's            */
+    const struct vs_stages *stages;  /* what differs between the pipelines
+                                        (pipeline.c)                            */
 } vs_frame;
 
 /* Pixels of sheet-buffer apron left and right of a tile's buffer: a

@@ -1,10 +1,10 @@
 /* Normalisation and shading through lookup tables (paper §4.2): Clyne-Dennis
  * spherical angles (eqs. 10-11) from a gradient quantised to signed bytes,
  * and a shading table indexed by the two angles.  No square root, no pow. */
-#ifndef VS_NORMALS_H
-#define VS_NORMALS_H
+#ifndef VS_SHADE_LUT_H
+#define VS_SHADE_LUT_H
 
-#include "internal.h"
+#include "light.h"
 
 #include <float.h>
 #if defined(__x86_64__) || defined(__SSE__)

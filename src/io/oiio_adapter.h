@@ -1,10 +1,10 @@
-/* C interface to the OpenImageIO adapter (src/oiio_adapter.cpp), the only C++
+/* C interface to the OpenImageIO adapter (src/io/oiio_adapter.cpp), the only C++
  * in the project.  The adapter is a loadable module (vsplat-oiio.so), not
  * part of libvsplat: OpenImageIO pulls in some 260 shared libraries (OpenCV,
  * FFmpeg, GStreamer, ...) that cost 130 MB of resident memory and 0.15 s at
  * every start, which a program that only renders volumes should not pay.
  * The library reaches the entry points below through the table vs_oiio(ctx)
- * loads on a context's first image I/O (src/oiio_module.c); calling them
+ * loads on a context's first image I/O (src/io/oiio_module.c); calling them
  * directly from the library would not link.  Every entry catches exceptions and reports a status plus a
  * message (which names the file) in the caller's buffer, so the C side never
  * sees C++ and the adapter never touches a vs_context. */

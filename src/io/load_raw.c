@@ -3,7 +3,9 @@
  * caller.  The data must be exactly the expected size: short files are
  * "truncated", longer ones report their extra bytes; both are errors, since
  * a size mismatch almost always means wrong dimensions or type. */
+#include "context.h"
 #include "load.h"
+#include "load_common.h"
 
 #include <errno.h>
 #include <stdio.h>

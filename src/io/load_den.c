@@ -4,7 +4,9 @@
  * Files are little-endian; a header whose version only reads as 1 when
  * byte-swapped (old big-endian machines) is accepted too.  No spacing is
  * stored, so it is 1,1,1 unless the caller overrides it. */
+#include "context.h"
 #include "load.h"
+#include "load_common.h"
 
 #include <errno.h>
 #include <stdio.h>

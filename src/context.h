@@ -1,0 +1,41 @@
+/* The context: the caches a renderer keeps between calls, and the
+ * last-error message every call reports into (error.c). */
+#ifndef VS_CONTEXT_H
+#define VS_CONTEXT_H
+
+#include "vsplat.h"
+#include <stdint.h>
+
+struct vs_pool;
+struct vs_relevant_cache;
+struct vs_shade_lut;
+struct vs_context {
+    char error[512];
+    struct vs_pool *pool;       /* created lazily, reused across frames        */
+    int pool_threads;
+    int pool_pin;
+    struct vs_relevant_cache *relevant; /* relevant-voxel list, reused          */
+    uint64_t otsu_serial;               /* default iso (Otsu) of the volume with
+                                           this serial (0: none): a full pass
+                                           over the volume, once, not per frame */
+    double otsu_iso;
+    struct vs_shade_lut *shade_lut;     /* normal and shading tables, rebuilt
+                                           only when their size or the light
+                                           changes (a headlight never does) */
+    struct vs_tile_scratch *scratch;    /* per worker, reused across frames       */
+    int nscratch;
+    const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */
+    void *oiio_handle;                  /* its dlopen handle                     */
+};
+
+/* Free the workers' tile scratch (src/tile.c). */
+void vs_tile_scratch_release(struct vs_tile_scratch *s, int n);
+
+/* Set the last-error message (printf-style); returns status for chaining. */
+vs_status vs_set_error(vs_context *ctx, vs_status st, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+#endif

@@ -1,0 +1,23 @@
+/* The per-format readers (load_*.c) as the loader front end (load.c)
+ * calls them.  Every reader sets the context error with a message that
+ * starts with the path, and returns the status; what they share is
+ * load_common.h's, so no reader depends on the front end. */
+#ifndef VS_LOAD_H
+#define VS_LOAD_H
+
+#include "volume.h"
+#include <stdint.h>
+
+vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out);
+vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out);
+vs_status vs_load_den(vs_context *ctx, const char *path, vs_volume **out);
+vs_status vs_load_raw(vs_context *ctx, const char *path, const int dims[3], vs_type type,
+                      vs_endian endian, vs_volume **out);
+/* Any single image file read by OpenImageIO; its pages are the z slices. */
+vs_status vs_load_image_pages(vs_context *ctx, const char *path, vs_volume **out);
+/* A folder of PNG/TIFF slices, in natural numeric order of the names. */
+vs_status vs_load_folder(vs_context *ctx, const char *path, vs_volume **out);
+/* An uncompressed ustar archive of PNG/TIFF slices, in member order. */
+vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out);
+
+#endif

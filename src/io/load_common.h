@@ -1,0 +1,25 @@
+/* What the volume readers (load_*.c) share (load_common.c). */
+#ifndef VS_LOAD_COMMON_H
+#define VS_LOAD_COMMON_H
+
+#include "volume.h"
+
+#include <stdint.h>
+
+/* Size of a regular file; rejects missing files, folders, FIFOs and devices
+ * (reading those could hang). */
+vs_status vs_load_file_size(vs_context *ctx, const char *path, uint64_t *size);
+/* Case-insensitive "path ends with suffix". */
+int vs_load_ends_with(const char *path, const char *suffix);
+/* Checks dims against VS_MAX_DIM/VS_MAX_VOXELS; *bytes = voxels * elem. */
+vs_status vs_load_check_dims(vs_context *ctx, const char *path, const int64_t dims[3],
+                             size_t elem, uint64_t *bytes);
+/* Largest plausible inflated size of `compressed` bytes of gzip/deflate
+ * (deflate cannot exceed about 1032:1), to refuse absurd headers early. */
+uint64_t vs_load_inflate_bound(uint64_t compressed);
+
+/* vs_volume_alloc whose error message is prefixed with the path. */
+vs_status vs_load_alloc(vs_context *ctx, const char *path, vs_type type, const int dims[3],
+                        const double spacing[3], vs_volume **out);
+
+#endif

@@ -1,0 +1,48 @@
+/* The four splatting pipelines as tables of stage functions (tile.h's
+ * vs_stages): what differs between them is chosen here once per frame, so
+ * the sheet loop and the stages do not branch on the pipeline.
+ *   pre         classify and shade voxels, splat colour and opacity
+ *   post-cd     splat density; classify, central differences, shade
+ *   post-gs     splat density and its gradient (gradient splats)
+ *   post-alpha  splat shaded colour and density; classify the density */
+#include "activate.h"
+#include "rasterize.h"
+#include "shade.h"
+#include "sheet_classify.h"
+
+#include <stddef.h>
+
+static const vs_stages post_cd[2] = {
+    {.ch = 1, .ahead = 1, .weights = vs_weights_density, .raster = vs_raster1,
+     .activate = vs_activate_density,
+     .classify = vs_classify_post_cd, .shade = vs_shade_post_lut},
+    {.ch = 1, .ahead = 1, .weights = vs_weights_density, .raster = vs_raster1,
+     .activate = vs_activate_density,
+     .classify = vs_classify_post_cd, .shade = vs_shade_post_exact},
+};
+static const vs_stages post_gs[2] = {
+    {.ch = 4, .gradient_splats = 1, .weights = vs_weights_density, .raster = vs_raster_gs,
+     .activate = vs_activate_gradient,
+     .classify = vs_classify_post_gs, .shade = vs_shade_post_lut},
+    {.ch = 4, .gradient_splats = 1, .weights = vs_weights_density, .raster = vs_raster_gs,
+     .activate = vs_activate_gradient,
+     .classify = vs_classify_post_gs, .shade = vs_shade_post_exact},
+};
+static const vs_stages pre = {.ch = 4, .pre_shaded = 1, .weights = vs_weights_pre, .raster = vs_raster4,
+                              .activate = vs_activate_rgba,
+                              .classify = vs_classify_pre, .shade = vs_shade_pre};
+static const vs_stages post_alpha = {.ch = 4, .pre_shaded = 1, .weights = vs_weights_post_alpha,
+                                     .raster = vs_raster4, .activate = vs_activate_rgba, .classify = vs_classify_post_alpha,
+                                     .shade = vs_shade_post_alpha};
+
+const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals)
+{
+    const int e = exact_normals != 0;
+    switch (p) {
+    case VS_PIPELINE_PRE: return &pre;
+    case VS_PIPELINE_POST_CD: return &post_cd[e];
+    case VS_PIPELINE_POST_GS: return &post_gs[e];
+    case VS_PIPELINE_POST_ALPHA: return &post_alpha;
+    default: return NULL; /* the ray caster has no sheets */
+    }
+}

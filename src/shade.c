@@ -1,0 +1,239 @@
+/* Shading: voxels before splatting (pre-shaded pipelines: classified
+ * colour times the Phong terms of the grid gradient) and sheet pixels
+ * after classification (post-shaded: the Phong terms of the sheet's
+ * gradient, by the Clyne-Dennis tables or exact; pre: the splatted colour
+ * divided by the splatted opacity; post-alpha: the splatted colour).  The
+ * light model is light.c's, the tables shade_lut.c's. */
+#include "shade.h"
+
+#include <float.h>
+#include <math.h>
+
+static inline void lookup_color(const vs_frame *F, float v, float rgb[3])
+{
+    const vs_classify *c = F->cls;
+    float x = (float)((v - c->vmin) * c->scale);
+    if (!(x > 0.0f)) x = 0.0f; /* also NaN */
+    if (x >= (float)(VS_TF_TABLE - 1)) x = (float)(VS_TF_TABLE - 1); /* also +inf: no int overflow */
+    int i = (int)x;
+    if (i >= VS_TF_TABLE - 1) {
+        rgb[0] = c->color[VS_TF_TABLE - 1][0];
+        rgb[1] = c->color[VS_TF_TABLE - 1][1];
+        rgb[2] = c->color[VS_TF_TABLE - 1][2];
+        return;
+    }
+    float f = x - (float)i;
+    for (int ch = 0; ch < 3; ch++) rgb[ch] = c->color[i][ch] + f * (c->color[i + 1][ch] - c->color[i][ch]);
+}
+
+static inline float pre_opacity(const vs_frame *F, float a)
+{
+    if (!(a > 0.0f)) return 0.0f;
+    if (a >= 1.0f) return F->opacity_corr[1024];
+    float x = a * 1024.0f;
+    int i = (int)x;
+    float f = x - (float)i;
+    return F->opacity_corr[i] + f * (F->opacity_corr[i + 1] - F->opacity_corr[i]);
+}
+
+static inline void shade_gradient(const vs_frame *F, float gx, float gy, float gz, float *d, float *sp)
+{
+    /* view space (per pixel, per pixel, per view unit) -> eye frame per mm */
+    float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
+    gx *= ppm;
+    gy *= ppm;
+    gz *= zpm;
+    if (F->s->exact_normals) {
+        double n[3] = {gx, gy, gz}, dd, ss;
+        vs_light_eval(&F->light, n, &dd, &ss);
+        *d = (float)dd;
+        *sp = (float)ss;
+    } else {
+        vs_shade_lut_eval(&F->lut, gx, gy, gz, d, sp);
+    }
+}
+
+/* Splat weights of the voxels p[lane], lane in the mask `live` (at most
+ * VS_PLACE_BATCH), from their linear index in the volume: density (post),
+ * or classified colour times the Phong terms of its grid gradient
+ * (pre-shading: once per voxel and view).  The normal-table look-ups are a
+ * chain of three dependent loads that miss the cache; each level is issued
+ * for the whole batch before the next, so that the misses of different
+ * voxels overlap. */
+void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w[][4])
+{
+    const float bscale = (float)(F->fp.b / F->fp.slab);
+    for (unsigned m = live; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        w[l][0] = vs_volume_density(F->vol, p[l].v) * bscale;
+        w[l][1] = w[l][2] = w[l][3] = 0.0f;
+    }
+}
+
+/* Pre-shaded: w[3] is the opacity (pre) or the density (post-alpha, which
+ * classifies the splatted density on the sheet). */
+static inline void weights_shaded(const vs_frame *F, const pend *p, unsigned live, float w[][4], int opacity)
+{
+    const float bscale = (float)(F->fp.b / F->fp.slab);
+    const int *dims = F->vol->dims;
+    const vs_camera *cam = &F->cam;
+    const vs_shade_lut *lut = &F->lut;
+    float rgb[VS_PLACE_BATCH][3], alpha[VS_PLACE_BATCH], val[VS_PLACE_BATCH], d[VS_PLACE_BATCH],
+        sp[VS_PLACE_BATCH];
+    int cell[VS_PLACE_BATCH], zrow[VS_PLACE_BATCH], li[VS_PLACE_BATCH], r[VS_PLACE_BATCH];
+    for (unsigned m = live; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        const uint32_t v = p[l].v;
+        val[l] = vs_volume_density(F->vol, v);
+        alpha[l] = vs_classify_alpha(F->cls, val[l]);
+        lookup_color(F, val[l], rgb[l]);
+        float g[3];
+        vs_volume_grid_gradient(F->vol, (int)(v % (uint32_t)dims[0]), (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
+                                (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1])), v, g);
+        double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
+        double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
+                       -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
+                       gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
+        if (F->s->exact_normals) {
+            double dd, ss;
+            vs_light_eval(&F->light, n, &dd, &ss);
+            d[l] = (float)dd;
+            sp[l] = (float)ss;
+        } else {
+            cell[l] = vs_shade_lut_cell((float)n[0], (float)n[1], (float)n[2], &zrow[l]);
+        }
+    }
+    if (!F->s->exact_normals) { /* vs_shade_lut_eval, a level at a time */
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            li[l] = lut->lambda_bin[cell[l]];
+            r[l] = lut->radius[cell[l]];
+        }
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            const int pi = lut->phi_bin[zrow[l] + r[l]];
+            li[l] += pi * lut->nl;
+        }
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            d[l] = lut->diffuse[li[l]];
+            sp[l] = lut->specular[li[l]];
+        }
+    }
+    for (unsigned m = live; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
+        w[l][3] = (opacity ? alpha[l] : val[l]) * bscale;
+    }
+}
+
+
+void vs_weights_pre(const vs_frame *F, const pend *p, unsigned live, float w[][4])
+{
+    weights_shaded(F, p, live, w, 1);
+}
+
+void vs_weights_post_alpha(const vs_frame *F, const pend *p, unsigned live, float w[][4])
+{
+    weights_shaded(F, p, live, w, 0);
+}
+
+/* Perspective: a slab is crossed by the pixel's ray over its thickness
+ * times the ray's length per unit depth, so its opacity grows to
+ * 1 - (1 - a)^len (the ray caster steps the same way). */
+static void perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
+{
+    const vs_camera *cam = &t->F->cam;
+    for (int y = r->y0; y < r->y1; y++)
+        for (int x = r->xa[y]; x < r->xb[y]; x++) {
+            float *a = alpha + (y - 1) * t->tw + (x - 1);
+            if (!(*a > 0.0f && *a < 1.0f)) continue;
+            const float len = (float)vs_camera_ray_length(cam, x + t->ox, y + t->oy);
+            *a = 1.0f - powf(1.0f - *a, len);
+        }
+}
+
+/* Post-shaded, lookup tables: a kernel per span (src/kernels.h). */
+void vs_shade_post_lut(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    const int ch = F->stages->ch;
+    for (int y = sp->y0; y < sp->y1; y++) {
+        if (sp->xa[y] == sp->xb[y]) continue;
+        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        size_t b = (size_t)y * t->stride + sp->xa[y];
+        F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, sv->q + ch * b, ch, sp->xb[y] - sp->xa[y], sv->tabs);
+    }
+    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
+}
+
+/* Post-shaded, exact normals: the light evaluated per pixel. */
+void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    const int ch = F->stages->ch;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            size_t b = (size_t)y * t->stride + x;
+            if (!(sb.alpha[o] > 0.0f)) continue;
+            float *c = sb.g + 3 * o;
+            float d, spec, rgb[3];
+            shade_gradient(F, c[0], c[1], c[2], &d, &spec);
+            lookup_color(F, sv->q[ch * b], rgb);
+            c[0] = rgb[0] * d + spec;
+            c[1] = rgb[1] * d + spec;
+            c[2] = rgb[2] * d + spec;
+        }
+    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
+}
+
+/* Pre-shaded: opacity-weighted colour / interpolated opacity, and the
+ * opacity corrected for the slab. */
+void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    const float *q = sv->q;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            size_t b = (size_t)y * t->stride + x;
+            float a = sb.alpha[o];
+            if (!(a > 0.0f)) continue;
+            float *c = sb.g + 3 * o;
+            /* an opacity so small that its inverse overflows (a transfer
+             * function whose opacity rises over 1e39 units) shows nothing:
+             * colour 0, not inf * 0 = NaN */
+            float inv = 1.0f / a;
+            if (!(inv <= FLT_MAX)) inv = 0.0f;
+            float cr = q[4 * b] * inv, cg = q[4 * b + 1] * inv, cb = q[4 * b + 2] * inv;
+            c[0] = cr > 1.0f ? 1.0f : cr;
+            c[1] = cg > 1.0f ? 1.0f : cg;
+            c[2] = cb > 1.0f ? 1.0f : cb;
+            sb.alpha[o] = pre_opacity(F, a);
+        }
+    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
+}
+
+/* Pre-shaded, post-classified opacity: the splatted colour, clamped. */
+void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    const float *q = sv->q;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            size_t b = (size_t)y * t->stride + x;
+            if (!(sb.alpha[o] > 0.0f)) continue;
+            float *c = sb.g + 3 * o;
+            for (int i = 0; i < 3; i++) {
+                float v = q[4 * b + i];
+                c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
+            }
+        }
+    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
+}

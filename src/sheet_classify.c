@@ -1,0 +1,132 @@
+/* Classification and gradients of a sheet (the first per-sheet stage):
+ * each pixel of the shaded spans gets its opacity from the transfer
+ * function and, post-shaded, its gradient (central differences across the
+ * sheets before and after, or the gradient splats); pixels outside the
+ * volume and pixels already opaque are cleared so that shading and
+ * compositing skip them.  One function per pipeline (pipeline.c). */
+#include "sheet_classify.h"
+#include "occlusion.h"
+
+static inline float lookup_corr(const vs_frame *F, const float *table, float v)
+{
+    const vs_classify *c = F->cls;
+    float x = (float)((v - c->vmin) * c->scale);
+    if (!(x > 0.0f)) x = 0.0f;
+    if (x >= (float)(VS_TF_TABLE - 1)) return table[VS_TF_TABLE - 1];
+    int i = (int)x;
+    float f = x - (float)i;
+    return table[i] + f * (table[i + 1] - table[i]);
+}
+
+
+/* With a transfer function that makes value 0 visible, sheet pixels whose
+ * slab centre lies outside the volume (where nothing was splatted, so q = 0)
+ * must stay transparent, as they are for the ray caster. */
+static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
+{
+    const vs_frame *F = t->F;
+    const vs_camera *cam = &F->cam;
+    const double z = (k + 0.5) * F->fp.slab;
+    const double lim[3] = {F->rel->dims[0] - 0.5, F->rel->dims[1] - 0.5, F->rel->dims[2] - 0.5};
+    for (int y = r->y0; y < r->y1; y++)
+        for (int x = r->xa[y]; x < r->xb[y]; x++) {
+            double v[3] = {x + t->ox, y + t->oy, z}, idx[3];
+            vs_camera_view_to_index(cam, v, idx);
+            int inside = idx[0] >= -0.5 && idx[0] <= lim[0] && idx[1] >= -0.5 && idx[1] <= lim[1] &&
+                         idx[2] >= -0.5 && idx[2] <= lim[2];
+            if (!inside) alpha[(y - 1) * t->tw + (x - 1)] = 0.0f;
+        }
+}
+
+/* Perspective, post-cd: sheet k's central differences are per pixel of
+ * that sheet, which lie 1/s_k depth-0 pixels apart, and the difference
+ * across sheets runs along the pixel's ray, not along view z.  With the
+ * world point P = (u Z/f, v Z/f, Z) of pixel offset (u, v) from the image
+ * centre (f the focal length in pixels), dF/dZ at a fixed pixel is
+ * Fx u/f + Fy v/f + Fz; solved for Fz.  Units out as in the orthographic
+ * case: x, y per depth-0 pixel, z per view unit. */
+static void perspective_gradients(const tile_ctx *t, int k, const spans *r, const float *alpha, float *g)
+{
+    const vs_camera *cam = &t->F->cam;
+    const float sk = (float)vs_camera_sheet_scale(cam, k, t->F->fp.slab);
+    const float cz = (float)(cam->px_per_mm / (cam->focal_px * cam->z_per_mm));
+    for (int y = r->y0; y < r->y1; y++) {
+        const float v = (float)((y + t->oy) - cam->cy);
+        for (int x = r->xa[y]; x < r->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            if (!(alpha[o] > 0.0f)) continue;
+            const float u = (float)((x + t->ox) - cam->cx);
+            float *p = g + 3 * o;
+            p[0] *= sk;
+            p[1] *= sk;
+            p[2] -= (p[0] * u + p[1] * v) * cz;
+        }
+    }
+}
+
+/* What every pipeline does after its own classification. */
+static inline void classify_finish(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    if (F->clip_to_volume) clip_outside(t, sv->k, sv->sp, sb.alpha);
+    if (F->s->occlusion) vs_skip_opaque(t, sv->sp, sv->acc, sb.alpha);
+}
+
+/* Post-cd: density classified, (FH)D central differences across the
+ * sheets before and after. */
+void vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    for (int y = sp->y0; y < sp->y1; y++) {
+        if (sp->xa[y] == sp->xb[y]) continue;
+        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        size_t b = (size_t)y * t->stride + sp->xa[y];
+        F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, sv->q + b, sv->prev + b, sv->next + b, t->stride,
+                            sp->xb[y] - sp->xa[y], sv->tabs);
+    }
+    if (F->clip_to_volume) clip_outside(t, sv->k, sp, sb.alpha);
+    if (F->cam.persp) perspective_gradients(t, sv->k, sp, sb.alpha, sb.g);
+    if (F->s->occlusion) vs_skip_opaque(t, sp, sv->acc, sb.alpha);
+}
+
+/* Post-gs: density classified, the gradient splatted with it. */
+void vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    for (int y = sp->y0; y < sp->y1; y++) {
+        if (sp->xa[y] == sp->xb[y]) continue;
+        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        size_t b = (size_t)y * t->stride + sp->xa[y];
+        F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, sv->q + 4 * b, sp->xb[y] - sp->xa[y], sv->tabs);
+    }
+    classify_finish(t, sv, sb);
+}
+
+/* Pre: the splatted opacity. */
+void vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const spans *sp = sv->sp;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            size_t b = (size_t)y * t->stride + x;
+            sb.alpha[o] = sv->q[4 * b + 3];
+        }
+    classify_finish(t, sv, sb);
+}
+
+/* Post-alpha: the splatted density classified, corrected for the slab. */
+void vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            size_t b = (size_t)y * t->stride + x;
+            sb.alpha[o] = lookup_corr(F, F->alpha_corr, sv->q[4 * b + 3]);
+        }
+    classify_finish(t, sv, sb);
+}

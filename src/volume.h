@@ -1,0 +1,78 @@
+/* Volumes inside the library: the voxels, their value range, and the
+ * analytic function of a synthetic scene (the ray caster's ground truth). */
+#ifndef VS_VOLUME_H
+#define VS_VOLUME_H
+
+#include "vsplat.h"
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/* An analytic scene definition: f and its gradient at a point given in
+ * voxel-index coordinates (continuous; voxel i sits at index i).  Used by the
+ * reference ray caster as ground truth.  `params` points into the volume. */
+typedef struct vs_analytic {
+    double (*f)(const void *params, const double p[3]);
+    void (*grad)(const void *params, const double p[3], double g[3]);
+    double iso;          /* the scene's natural iso-value                    */
+    double params[64];   /* scene parameters, copied with the volume         */
+} vs_analytic;
+
+struct vs_volume {
+    vs_type type;
+    int dims[3];
+    double spacing[3];
+    double vmin, vmax;   /* value range (finite values)                       */
+    void *data;          /* dims[0]*dims[1]*dims[2] elements, x fastest        */
+    int has_analytic;
+    vs_analytic analytic;
+    double default_iso;  /* scene's iso; NAN if none                          */
+    double default_ramp; /* scene's ramp; NAN if none                         */
+    uint64_t serial;     /* unique per allocation and per vs_volume_update_range:
+                            what caches key on (an address can be reused, and
+                            data rewritten in place keeps it) */
+};
+
+size_t vs_type_size(vs_type t);
+/* Value of voxel at linear index i as double. */
+static inline double vs_volume_at(const struct vs_volume *v, size_t i)
+{
+    switch (v->type) {
+    case VS_U8: return ((const uint8_t *)v->data)[i];
+    case VS_I16: return ((const int16_t *)v->data)[i];
+    case VS_U16: return ((const uint16_t *)v->data)[i];
+    default: return ((const float *)v->data)[i];
+    }
+}
+/* What a splat is weighted by: the value at linear index i, non-finite
+ * values read as 0 (empty space). */
+static inline float vs_volume_density(const struct vs_volume *v, size_t i)
+{
+    double x = vs_volume_at(v, i);
+    return isfinite(x) ? (float)x : 0.0f;
+}
+/* Central-difference gradient on the grid at voxel (i, j, k), linear index
+ * idx, in index units (one-sided at the borders; non-finite results 0):
+ * what the pre-shaded pipelines shade a voxel by. */
+static inline void vs_volume_grid_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3])
+{
+    const int p[3] = {i, j, k};
+    const int *d = v->dims;
+    const size_t st[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
+    for (int a = 0; a < 3; a++) {
+        int lo = p[a] > 0 ? 1 : 0, hi = p[a] < d[a] - 1 ? 1 : 0;
+        double gr = 0.0;
+        if (lo + hi > 0) {
+            double fh = vs_volume_at(v, idx + hi * st[a]);
+            double fl = vs_volume_at(v, idx - lo * st[a]);
+            gr = (fh - fl) / (lo + hi);
+            if (!isfinite(gr)) gr = 0.0;
+        }
+        g[a] = (float)gr;
+    }
+}
+/* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
+vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
+                          const double spacing[3], struct vs_volume **out);
+
+#endif
