@@ -3,7 +3,9 @@
  * (Mueller, Möller, Crawfis, IEEE Visualization 1999), public C API.
  *
  * Pattern: opaque handles with create/release, a settings struct filled with
- * defaults by vs_settings_init(), every call returns a vs_status, and the
+ * defaults by vs_settings_init() (which records this header's struct sizes,
+ * so settings can grow without breaking programs built against an older
+ * header: docs/ABI.md), every call returns a vs_status, and the
  * context keeps a human-readable last-error message.  The library never prints.
  * A context keeps caches between calls (worker pool, relevant voxels, shading
  * tables), so it serves one call at a time: use one context per thread that
@@ -20,9 +22,9 @@ extern "C" {
 #endif
 
 #define VS_VERSION_MAJOR 0
-#define VS_VERSION_MINOR 1
+#define VS_VERSION_MINOR 2
 #define VS_VERSION_PATCH 0
-#define VS_VERSION_STRING "0.1.0"
+#define VS_VERSION_STRING "0.2.0"
 
 /* VS_API marks what libvsplat.so exports: the library is built with hidden
  * visibility, so a declaration without it stays internal (docs/ABI.md). */
@@ -78,7 +80,12 @@ typedef struct vs_tf_point {
  * Always called on the thread that called vs_render(). */
 typedef int (*vs_progress_fn)(void *user, double fraction);
 
+/* Fields are only ever appended.  Fill it with vs_settings_init(), never by
+ * hand or with = {0}: vs_render refuses a struct_size it does not know. */
 typedef struct vs_settings {
+    size_t struct_size;        /* sizeof(vs_settings) as this program was built */
+    size_t stats_size;         /* sizeof(vs_stats) likewise: vs_render writes
+                                  no more of *stats (both set by the init)     */
     vs_pipeline pipeline;
     int width, height;         /* image size in pixels (default 512x512)        */
     double azimuth, elevation; /* degrees; view 0,0 looks along +y, +z up        */
@@ -139,6 +146,7 @@ typedef struct vs_stage_times {
 } vs_stage_times;
 
 typedef struct vs_stats {
+    size_t struct_size;        /* bytes vs_render wrote: the settings' stats_size */
     const char *pipeline;      /* static strings, valid forever                  */
     const char *isa;
     int threads;
@@ -170,7 +178,12 @@ VS_API const char *vs_last_error(const vs_context *ctx); /* never NULL */
 VS_API const char *vs_status_string(vs_status s);
 VS_API const char *vs_version(void);
 
-VS_API void vs_settings_init(vs_settings *s);
+/* Defaults for every setting.  Call it as vs_settings_init(&s): the macro
+ * passes this header's sizes, and the library writes at most struct_size
+ * bytes, so a program built against an older (shorter) vs_settings gets
+ * nothing written past its struct. */
+VS_API void vs_settings_init_sized(vs_settings *s, size_t struct_size, size_t stats_size);
+#define vs_settings_init(s) vs_settings_init_sized((s), sizeof(vs_settings), sizeof(vs_stats))
 VS_API const char *vs_pipeline_name(vs_pipeline p);
 VS_API vs_status vs_pipeline_parse(const char *name, vs_pipeline *out);
 VS_API const char *vs_isa_name(vs_isa isa);
@@ -183,6 +196,7 @@ typedef enum vs_endian { VS_ENDIAN_LITTLE = 0, VS_ENDIAN_BIG = 1 } vs_endian;
 
 /* Options for headerless raw input (and spacing override for any format). */
 typedef struct vs_load_options {
+    size_t struct_size;       /* sizeof(vs_load_options): set by the init   */
     int raw;                  /* 1: treat the file as headerless raw            */
     int dims[3];
     vs_type type;
@@ -190,7 +204,9 @@ typedef struct vs_load_options {
     int has_spacing;
     double spacing[3];
 } vs_load_options;
-VS_API void vs_load_options_init(vs_load_options *o);
+/* Defaults; call it as vs_load_options_init(&o) (same scheme as the settings). */
+VS_API void vs_load_options_init_sized(vs_load_options *o, size_t struct_size);
+#define vs_load_options_init(o) vs_load_options_init_sized((o), sizeof(vs_load_options))
 
 /* Formats: .nii/.nii.gz (nifticlib), .nrrd/.nhdr (Teem), .tif/.tiff stacks,
  * folders and .tar of PNG slices (OpenImageIO), .den (VolPack), raw (+gzip). */
@@ -241,6 +257,10 @@ VS_API vs_status vs_tf_load_for_volume(vs_context *ctx, const char *path, const 
 VS_API void vs_tf_free(vs_tf_point *points);
 
 /* ---- rendering ---- */
+/* Reads s->struct_size bytes of the settings (newer fields keep their
+ * defaults) and, on success, writes s->stats_size bytes of *stats (may be
+ * NULL).  A struct_size or stats_size this library does not know (settings
+ * never initialised, or from a newer header) is VS_ERR_INVALID_ARGUMENT. */
 VS_API vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s,
                            vs_image *out, vs_stats *stats);
 VS_API void vs_image_free(vs_image *img);
@@ -265,7 +285,9 @@ typedef struct vs_image_diff {
 VS_API vs_status vs_image_compare(vs_context *ctx, const vs_image *a, const vs_image *b,
                                   vs_image_diff *out);
 
-/* Stats as JSON (the DESIGN.md contract) into buf; returns bytes needed. */
+/* Stats as JSON into buf, like snprintf: returns the bytes needed.  Writes
+ * the fields st->struct_size covers; a size this library does not know
+ * gives "" and 0.  NULL st gives every field as zero. */
 VS_API size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap);
 
 #ifdef __cplusplus
