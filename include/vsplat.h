@@ -3,7 +3,9 @@
  * (Mueller, Möller, Crawfis, IEEE Visualization 1999), public C API.
  *
  * Pattern: opaque handles with create/release, a settings struct filled with
- * defaults by vs_settings_init(), every call returns a vs_status, and the
+ * defaults by vs_settings_init() (which records this header's struct sizes,
+ * so settings can grow without breaking programs built against an older
+ * header: docs/ABI.md), every call returns a vs_status, and the
  * context keeps a human-readable last-error message.  The library never prints.
  * A context keeps caches between calls (worker pool, relevant voxels, shading
  * tables), so it serves one call at a time: use one context per thread that
@@ -20,9 +22,17 @@ extern "C" {
 #endif
 
 #define VS_VERSION_MAJOR 0
-#define VS_VERSION_MINOR 1
+#define VS_VERSION_MINOR 2
 #define VS_VERSION_PATCH 0
-#define VS_VERSION_STRING "0.1.0"
+#define VS_VERSION_STRING "0.2.0"
+
+/* VS_API marks what libvsplat.so exports: the library is built with hidden
+ * visibility, so a declaration without it stays internal (docs/ABI.md). */
+#if defined(__GNUC__) && __GNUC__ >= 4
+#define VS_API __attribute__((visibility("default")))
+#else
+#define VS_API
+#endif
 
 /* Stable status codes: values never change meaning. */
 typedef enum vs_status {
@@ -70,7 +80,12 @@ typedef struct vs_tf_point {
  * Always called on the thread that called vs_render(). */
 typedef int (*vs_progress_fn)(void *user, double fraction);
 
+/* Fields are only ever appended.  Fill it with vs_settings_init(), never by
+ * hand or with = {0}: vs_render refuses a struct_size it does not know. */
 typedef struct vs_settings {
+    size_t struct_size;        /* sizeof(vs_settings) as this program was built */
+    size_t stats_size;         /* sizeof(vs_stats) likewise: vs_render writes
+                                  no more of *stats (both set by the init)     */
     vs_pipeline pipeline;
     int width, height;         /* image size in pixels (default 512x512)        */
     double azimuth, elevation; /* degrees; view 0,0 looks along +y, +z up        */
@@ -131,6 +146,7 @@ typedef struct vs_stage_times {
 } vs_stage_times;
 
 typedef struct vs_stats {
+    size_t struct_size;        /* bytes vs_render wrote: the settings' stats_size */
     const char *pipeline;      /* static strings, valid forever                  */
     const char *isa;
     int threads;
@@ -156,25 +172,31 @@ typedef struct vs_image {
 } vs_image;
 
 /* ---- context ---- */
-vs_status vs_context_create(vs_context **out);
-void vs_context_release(vs_context *ctx);
-const char *vs_last_error(const vs_context *ctx); /* never NULL */
-const char *vs_status_string(vs_status s);
-const char *vs_version(void);
+VS_API vs_status vs_context_create(vs_context **out);
+VS_API void vs_context_release(vs_context *ctx);
+VS_API const char *vs_last_error(const vs_context *ctx); /* never NULL */
+VS_API const char *vs_status_string(vs_status s);
+VS_API const char *vs_version(void);
 
-void vs_settings_init(vs_settings *s);
-const char *vs_pipeline_name(vs_pipeline p);
-vs_status vs_pipeline_parse(const char *name, vs_pipeline *out);
-const char *vs_isa_name(vs_isa isa);
-vs_status vs_isa_parse(const char *name, vs_isa *out);
+/* Defaults for every setting.  Call it as vs_settings_init(&s): the macro
+ * passes this header's sizes, and the library writes at most struct_size
+ * bytes, so a program built against an older (shorter) vs_settings gets
+ * nothing written past its struct. */
+VS_API void vs_settings_init_sized(vs_settings *s, size_t struct_size, size_t stats_size);
+#define vs_settings_init(s) vs_settings_init_sized((s), sizeof(vs_settings), sizeof(vs_stats))
+VS_API const char *vs_pipeline_name(vs_pipeline p);
+VS_API vs_status vs_pipeline_parse(const char *name, vs_pipeline *out);
+VS_API const char *vs_isa_name(vs_isa isa);
+VS_API vs_status vs_isa_parse(const char *name, vs_isa *out);
 /* best ISA this CPU and OS support */
-vs_isa vs_isa_detect(void);
+VS_API vs_isa vs_isa_detect(void);
 
 /* ---- volumes ---- */
 typedef enum vs_endian { VS_ENDIAN_LITTLE = 0, VS_ENDIAN_BIG = 1 } vs_endian;
 
 /* Options for headerless raw input (and spacing override for any format). */
 typedef struct vs_load_options {
+    size_t struct_size;       /* sizeof(vs_load_options): set by the init   */
     int raw;                  /* 1: treat the file as headerless raw            */
     int dims[3];
     vs_type type;
@@ -182,28 +204,30 @@ typedef struct vs_load_options {
     int has_spacing;
     double spacing[3];
 } vs_load_options;
-void vs_load_options_init(vs_load_options *o);
+/* Defaults; call it as vs_load_options_init(&o) (same scheme as the settings). */
+VS_API void vs_load_options_init_sized(vs_load_options *o, size_t struct_size);
+#define vs_load_options_init(o) vs_load_options_init_sized((o), sizeof(vs_load_options))
 
 /* Formats: .nii/.nii.gz (nifticlib), .nrrd/.nhdr (Teem), .tif/.tiff stacks,
  * folders and .tar of PNG slices (OpenImageIO), .den (VolPack), raw (+gzip). */
-vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
-                         vs_volume **out);
+VS_API vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
+                                vs_volume **out);
 /* Synthetic scenes: cube, sphere, ml[:N], head, cell (optionally NAME:N). */
-vs_status vs_volume_scene(vs_context *ctx, const char *spec, vs_volume **out);
-vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
-                           const double spacing[3], vs_volume **out);
-void vs_volume_release(vs_volume *v);
-void *vs_volume_data(vs_volume *v); /* x fastest, then y, then z */
-void vs_volume_dims(const vs_volume *v, int dims[3]);
-void vs_volume_spacing(const vs_volume *v, double spacing[3]);
-vs_type vs_volume_type(const vs_volume *v);
-const char *vs_type_name(vs_type t);
+VS_API vs_status vs_volume_scene(vs_context *ctx, const char *spec, vs_volume **out);
+VS_API vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
+                                  const double spacing[3], vs_volume **out);
+VS_API void vs_volume_release(vs_volume *v);
+VS_API void *vs_volume_data(vs_volume *v); /* x fastest, then y, then z */
+VS_API void vs_volume_dims(const vs_volume *v, int dims[3]);
+VS_API void vs_volume_spacing(const vs_volume *v, double spacing[3]);
+VS_API vs_type vs_volume_type(const vs_volume *v);
+VS_API const char *vs_type_name(vs_type t);
 /* Recompute the value range after writing into vs_volume_data(). */
-void vs_volume_update_range(vs_volume *v);
-void vs_volume_range(const vs_volume *v, double *lo, double *hi);
+VS_API void vs_volume_update_range(vs_volume *v);
+VS_API void vs_volume_range(const vs_volume *v, double *lo, double *hi);
 /* Otsu threshold of the value histogram: a default iso-value. */
-double vs_volume_default_iso(const vs_volume *v);
-int vs_volume_has_analytic(const vs_volume *v);
+VS_API double vs_volume_default_iso(const vs_volume *v);
+VS_API int vs_volume_has_analytic(const vs_volume *v);
 
 /* ---- transfer-function files ---- */
 /* Read a transfer function into a malloc'ed array of piecewise-linear
@@ -227,38 +251,44 @@ int vs_volume_has_analytic(const vs_volume *v);
  * malformed is VS_ERR_FORMAT with a message naming the file and the line
  * (or JSON element).  At most 65536 points; files up to 16 MiB.
  * vs_tf_load is vs_tf_load_for_volume with vol = NULL (.1dt then fails). */
-vs_status vs_tf_load(vs_context *ctx, const char *path, vs_tf_point **points, int *count);
-vs_status vs_tf_load_for_volume(vs_context *ctx, const char *path, const vs_volume *vol,
-                                vs_tf_point **points, int *count);
-void vs_tf_free(vs_tf_point *points);
+VS_API vs_status vs_tf_load(vs_context *ctx, const char *path, vs_tf_point **points, int *count);
+VS_API vs_status vs_tf_load_for_volume(vs_context *ctx, const char *path, const vs_volume *vol,
+                                       vs_tf_point **points, int *count);
+VS_API void vs_tf_free(vs_tf_point *points);
 
 /* ---- rendering ---- */
-vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s,
-                    vs_image *out, vs_stats *stats);
-void vs_image_free(vs_image *img);
+/* Reads s->struct_size bytes of the settings (newer fields keep their
+ * defaults) and, on success, writes s->stats_size bytes of *stats (may be
+ * NULL).  A struct_size or stats_size this library does not know (settings
+ * never initialised, or from a newer header) is VS_ERR_INVALID_ARGUMENT. */
+VS_API vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s,
+                           vs_image *out, vs_stats *stats);
+VS_API void vs_image_free(vs_image *img);
 
 /* ---- images (OpenImageIO) ---- */
 /* Format from the extension: .png (8-bit, or 16-bit with bits=16), .exr
  * (float), .tif/.tiff.  Written to a temporary name and renamed. */
-vs_status vs_image_write(vs_context *ctx, const char *path, const vs_image *img, int bits);
-vs_status vs_image_read(vs_context *ctx, const char *path, vs_image *out);
+VS_API vs_status vs_image_write(vs_context *ctx, const char *path, const vs_image *img, int bits);
+VS_API vs_status vs_image_read(vs_context *ctx, const char *path, vs_image *out);
 
 /* Several images of one size as one file: an animated GIF (.gif: 8-bit,
  * composited over black because GIF has no partial transparency, fps frames
  * per second, looping forever) or a multi-page TIFF (.tif/.tiff, 8-bit
  * RGBA).  Written to a temporary name and renamed, like vs_image_write. */
-vs_status vs_image_write_frames(vs_context *ctx, const char *path, const vs_image *frames, int count,
-                                double fps);
+VS_API vs_status vs_image_write_frames(vs_context *ctx, const char *path, const vs_image *frames, int count,
+                                       double fps);
 
 typedef struct vs_image_diff {
     double rmse, psnr, ssim, max_abs;
 } vs_image_diff;
 /* Over all four channels; psnr is +INFINITY for identical images. */
-vs_status vs_image_compare(vs_context *ctx, const vs_image *a, const vs_image *b,
-                           vs_image_diff *out);
+VS_API vs_status vs_image_compare(vs_context *ctx, const vs_image *a, const vs_image *b,
+                                  vs_image_diff *out);
 
-/* Stats as JSON (the DESIGN.md contract) into buf; returns bytes needed. */
-size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap);
+/* Stats as JSON into buf, like snprintf: returns the bytes needed.  Writes
+ * the fields st->struct_size covers; a size this library does not know
+ * gives "" and 0.  NULL st gives every field as zero. */
+VS_API size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap);
 
 #ifdef __cplusplus
 }

@@ -33,10 +33,16 @@ void vs_context_release(vs_context *ctx)
 
 const char *vs_version(void) { return VS_VERSION_STRING; }
 
-void vs_settings_init(vs_settings *s)
+/* The defaults are built in a full struct and only the caller's
+ * struct_size bytes of it copied, so an older, shorter layout gets nothing
+ * written past its end (src/abi.c, docs/ABI.md). */
+void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_size)
 {
-    if (!s) return;
+    if (!out || struct_size < sizeof out->struct_size) return;
+    vs_settings d, *s = &d;
     memset(s, 0, sizeof *s);
+    s->struct_size = struct_size;
+    s->stats_size = stats_size;
     s->pipeline = VS_PIPELINE_POST_CD;
     s->width = 512;
     s->height = 512;
@@ -68,6 +74,7 @@ void vs_settings_init(vs_settings *s)
     s->ray_step = 0.1;
     s->ray_trilinear = 0;
     s->ray_analytic = 1;
+    memcpy(out, s, struct_size < sizeof *s ? struct_size : sizeof *s);
 }
 
 static const char *const pipeline_names[] = {"pre", "post-cd", "post-gs", "post-alpha", "raycast"};

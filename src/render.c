@@ -1,9 +1,10 @@
 /* vs_render: validate, set up the frame (camera, classification, lighting,
  * kernel tables, relevant voxels), transform and bin the voxels into tiles,
  * run the tiles on the worker pool, and sum the workers' statistics. */
+#include "abi.h"
+#include "context.h"
 #include "raycast.h"
 #include "timing.h"
-#include "context.h"
 #include "finish.h"
 #include "pool.h"
 #include "tile.h"
@@ -452,19 +453,30 @@ fail:
     return rc;
 }
 
-vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *s, vs_image *out, vs_stats *st)
+vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *settings, vs_image *out,
+                    vs_stats *stats)
 {
     if (!ctx) return VS_ERR_INVALID_ARGUMENT;
-    if (!vol || !s || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "vs_render: NULL argument");
+    if (!vol || !settings || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "vs_render: NULL argument");
     out->width = out->height = 0;
     out->rgba = NULL;
-    vs_status rc = check_settings(ctx, s);
+    /* the caller's layouts of settings and stats, whatever header it was
+     * built with, to and from the library's own (src/abi.c) */
+    vs_settings full;
+    vs_status rc = vs_settings_import(ctx, settings, &full);
     if (rc != VS_OK) return rc;
-    if (s->pipeline == VS_PIPELINE_RAYCAST) return vs_raycast_render(ctx, vol, s, out, st);
-    if (s->isa > VS_ISA_SCALAR && s->isa > vs_isa_detect()) {
+    const vs_settings *s = &full;
+    vs_stats st_full, *st = stats ? &st_full : NULL;
+    rc = check_settings(ctx, s);
+    if (rc != VS_OK) return rc;
+    if (s->pipeline == VS_PIPELINE_RAYCAST)
+        rc = vs_raycast_render(ctx, vol, s, out, st);
+    else if (s->isa > VS_ISA_SCALAR && s->isa > vs_isa_detect())
         /* asking for more than the CPU has is a usage error, not a fallback */
-        return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "ISA %s is not supported by this CPU (best: %s)",
-                            vs_isa_name(s->isa), vs_isa_name(vs_isa_detect()));
-    }
-    return render_splat(ctx, vol, s, out, st);
+        rc = vs_set_error(ctx, VS_ERR_UNSUPPORTED, "ISA %s is not supported by this CPU (best: %s)",
+                          vs_isa_name(s->isa), vs_isa_name(vs_isa_detect()));
+    else
+        rc = render_splat(ctx, vol, s, out, st);
+    if (rc == VS_OK && stats) vs_stats_export(st, stats, s->stats_size);
+    return rc;
 }

@@ -1,10 +1,11 @@
-/* Render statistics as JSON (the DESIGN.md §2 contract).
+/* Render statistics as JSON.
  *
  * vs_stats_to_json() behaves like snprintf: it returns the number of bytes the
  * full document needs (excluding the terminating NUL) and writes at most cap
  * bytes, always NUL-terminated when cap > 0.  Non-finite numbers become null,
- * so the output is always valid JSON.  No global state. */
-#include "vsplat.h"
+ * so the output is always valid JSON.  Only the fields the caller's layout
+ * (st->struct_size, src/abi.c) holds are read and written.  No global state. */
+#include "abi.h"
 
 #include <inttypes.h>
 #include <math.h>
@@ -121,45 +122,53 @@ size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap)
     vs_stats zero;
     if (!st) {
         memset(&zero, 0, sizeof zero);
+        zero.struct_size = sizeof zero;
         st = &zero;
     }
-    put_str(&o, "{\n");
-    kv_str(&o, "pipeline", st->pipeline);
-    kv_str(&o, "isa", st->isa);
-    kv_int(&o, "threads", st->threads);
-    kv_int(&o, "width", st->width);
-    kv_int(&o, "height", st->height);
-    kv_u64(&o, "voxels_total", st->voxels_total);
-    kv_u64(&o, "voxels_relevant", st->voxels_relevant);
-    kv_u64(&o, "voxels_splatted", st->voxels_splatted);
-    kv_u64(&o, "voxels_culled", st->voxels_culled);
-    kv_u64(&o, "sheets", st->sheets);
-    kv_u64(&o, "tiles_total", st->tiles_total);
-    kv_u64(&o, "tiles_shaded", st->tiles_shaded);
-    kv_dbl(&o, "ms_total", st->ms_total);
-
-    key(&o, "  ", "ms_stage");
-    put_str(&o, "{\n");
-    const struct {
-        const char *name;
-        double v;
-    } stage[5] = {{"setup", st->ms_stage.setup},
-                  {"rasterize", st->ms_stage.rasterize},
-                  {"gradient", st->ms_stage.gradient},
-                  {"shade", st->ms_stage.shade},
-                  {"composite", st->ms_stage.composite}};
-    for (int i = 0; i < 5; i++) {
-        key(&o, "    ", stage[i].name);
-        put_double(&o, stage[i].v);
-        put_str(&o, i < 4 ? ",\n" : "\n");
+    if (!vs_stats_layout_known(st->struct_size)) {
+        if (o.cap > 0) o.buf[0] = '\0';
+        return 0;
     }
-    put_str(&o, "  },\n");
-
-    kv_dbl(&o, "ms_relevant", st->ms_relevant);
-    kv_dbl(&o, "iso_lo", st->iso_lo);
-    kv_dbl(&o, "iso_hi", st->iso_hi);
-    kv_dbl(&o, "ramp", st->ramp);
-    kv_int(&o, "pin_warning", st->pin_warning);
+    const size_t size = st->struct_size;
+#define HAS(m) (VS_FIELD_END(vs_stats, m) <= size)
+    put_str(&o, "{\n");
+    if (HAS(pipeline)) kv_str(&o, "pipeline", st->pipeline);
+    if (HAS(isa)) kv_str(&o, "isa", st->isa);
+    if (HAS(threads)) kv_int(&o, "threads", st->threads);
+    if (HAS(width)) kv_int(&o, "width", st->width);
+    if (HAS(height)) kv_int(&o, "height", st->height);
+    if (HAS(voxels_total)) kv_u64(&o, "voxels_total", st->voxels_total);
+    if (HAS(voxels_relevant)) kv_u64(&o, "voxels_relevant", st->voxels_relevant);
+    if (HAS(voxels_splatted)) kv_u64(&o, "voxels_splatted", st->voxels_splatted);
+    if (HAS(voxels_culled)) kv_u64(&o, "voxels_culled", st->voxels_culled);
+    if (HAS(sheets)) kv_u64(&o, "sheets", st->sheets);
+    if (HAS(tiles_total)) kv_u64(&o, "tiles_total", st->tiles_total);
+    if (HAS(tiles_shaded)) kv_u64(&o, "tiles_shaded", st->tiles_shaded);
+    if (HAS(ms_total)) kv_dbl(&o, "ms_total", st->ms_total);
+    if (HAS(ms_stage)) {
+        key(&o, "  ", "ms_stage");
+    put_str(&o, "{\n");
+        const struct {
+            const char *name;
+            double v;
+        } stage[5] = {{"setup", st->ms_stage.setup},
+                      {"rasterize", st->ms_stage.rasterize},
+                      {"gradient", st->ms_stage.gradient},
+                      {"shade", st->ms_stage.shade},
+                      {"composite", st->ms_stage.composite}};
+        for (int i = 0; i < 5; i++) {
+            key(&o, "    ", stage[i].name);
+            put_double(&o, stage[i].v);
+            put_str(&o, i < 4 ? ",\n" : "\n");
+        }
+        put_str(&o, "  },\n");
+    }
+    if (HAS(ms_relevant)) kv_dbl(&o, "ms_relevant", st->ms_relevant);
+    if (HAS(iso_lo)) kv_dbl(&o, "iso_lo", st->iso_lo);
+    if (HAS(iso_hi)) kv_dbl(&o, "iso_hi", st->iso_hi);
+    if (HAS(ramp)) kv_dbl(&o, "ramp", st->ramp);
+    if (HAS(pin_warning)) kv_int(&o, "pin_warning", st->pin_warning);
+#undef HAS
     key(&o, "  ", "version");
     put_json_string(&o, VS_VERSION_STRING);
     put_str(&o, "\n}\n");

@@ -55,12 +55,15 @@ for f in "$P/include/vsplat.h" "$P/bin/vsplat" "$LIBDIR/libvsplat.a" "$LIBDIR/pk
     "$P/share/vsplat/tf/engine.1dt" "$P/share/doc/vsplat/examples/example_embed.c"; do
     if [[ -e $f ]]; then ok; else bad "not installed: ${f#"$P"/}"; fi
 done
-# versioned soname: libvsplat.so -> libvsplat.so.MAJOR -> libvsplat.so.X.Y.Z
+# versioned soname: libvsplat.so -> libvsplat.so.SOVERSION -> libvsplat.so.X.Y.Z,
+# SOVERSION MAJOR.MINOR while the major is 0, else MAJOR (docs/ABI.md)
 VER=$("$VSPLAT" --version | awk '{print $2}')
-if [[ -e $LIBDIR/libvsplat.so.$VER && -L $LIBDIR/libvsplat.so.${VER%%.*} ]]; then ok; else bad "no versioned libvsplat.so.$VER"; fi
+SOV=${VER%%.*}
+[[ $SOV == 0 ]] && SOV=${VER%.*}
+if [[ -e $LIBDIR/libvsplat.so.$VER && -L $LIBDIR/libvsplat.so.$SOV ]]; then ok; else bad "no versioned libvsplat.so.$VER"; fi
 objdump -p "$LIBDIR/libvsplat.so" >"$T/objdump" 2>&1 || true
-if grep -q "SONAME *libvsplat.so.${VER%%.*}$" "$T/objdump"; then ok; else
-    bad "soname is not libvsplat.so.${VER%%.*}"; fi
+if grep -q "SONAME *libvsplat.so.$SOV$" "$T/objdump"; then ok; else
+    bad "soname is not libvsplat.so.$SOV"; fi
 # the installed CLI and man page; the CLI finds the image module under ../LIBDIR
 if [[ $("$P/bin/vsplat" --version) == "vsplat $VER" ]]; then ok; else bad "installed vsplat --version"; fi
 if [[ -f $LIBDIR/vsplat-modules/vsplat-oiio.so ]]; then ok; else bad "not installed: vsplat-modules/vsplat-oiio.so"; fi

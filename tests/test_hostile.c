@@ -108,6 +108,7 @@ static void test_context_and_names(void)
     CHECK(memchr(small, '\0', sizeof small) != NULL, "stats_to_json truncation not terminated");
     vs_stats st;
     memset(&st, 0, sizeof st); /* NULL pipeline/isa strings */
+    st.struct_size = sizeof st;
     char *buf = malloc(need + 1);
     CHECK(vs_stats_to_json(&st, buf, need + 1) == need, "stats_to_json sizes");
     free(buf);

@@ -1,6 +1,7 @@
 /* Volume loading front end: options, format dispatch by extension (or raw
  * when asked), then the steps common to every format (value range, spacing
  * override).  The per-format readers live in load_*.c. */
+#include "abi.h"
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
@@ -12,13 +13,17 @@
 #include <string.h>
 #include <sys/stat.h>
 
-void vs_load_options_init(vs_load_options *o)
+/* Writes at most struct_size bytes, like vs_settings_init_sized. */
+void vs_load_options_init_sized(vs_load_options *out, size_t struct_size)
 {
-    if (!o) return;
+    if (!out || struct_size < sizeof out->struct_size) return;
+    vs_load_options d, *o = &d;
     memset(o, 0, sizeof *o);
+    o->struct_size = struct_size;
     o->type = VS_U8;
     o->endian = VS_ENDIAN_LITTLE;
     for (int a = 0; a < 3; a++) o->spacing[a] = 1.0;
+    memcpy(out, o, struct_size < sizeof *o ? struct_size : sizeof *o);
 }
 
 /* Parses "..._64x64x93_i16le..." from a file name, so the named raw files
@@ -123,11 +128,11 @@ vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_option
     if (out) *out = NULL;
     if (!path || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: NULL argument");
     if (!*path) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: empty file name");
-    vs_load_options defaults;
-    if (!opt) {
-        vs_load_options_init(&defaults);
-        opt = &defaults;
-    }
+    /* the caller's layout into the library's own (src/abi.c) */
+    vs_load_options full;
+    vs_status rc = vs_load_options_import(ctx, opt, &full);
+    if (rc != VS_OK) return rc;
+    opt = &full;
     if (opt->has_spacing)
         for (int a = 0; a < 3; a++)
             if (!(opt->spacing[a] > 0.0) || !isfinite(opt->spacing[a]) || opt->spacing[a] > 1e12 ||
