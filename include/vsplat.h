@@ -68,6 +68,7 @@ typedef enum vs_isa {
 
 typedef struct vs_context vs_context;
 typedef struct vs_volume vs_volume;
+typedef struct vs_trace vs_trace;
 
 /* One control point of a piecewise-linear 1-D transfer function: value in
  * data units -> colour (0..1) and opacity per unit length (one voxel). */
@@ -139,11 +140,21 @@ typedef struct vs_settings {
 
     vs_progress_fn progress;
     void *progress_user;
+
+    /* profiling: record the frame's timeline into this trace (vs_trace_create;
+     * NULL, the default: nothing is recorded and nothing costs) */
+    vs_trace *trace;
 } vs_settings;
 
 typedef struct vs_stage_times {
     double setup, rasterize, gradient, shade, composite;
 } vs_stage_times;
+
+/* Bytes a stage reads or writes by construction (what its loops touch,
+ * counted from the work counts; caches not modelled). */
+typedef struct vs_stage_bytes {
+    uint64_t rasterize, gradient, shade, composite;
+} vs_stage_bytes;
 
 typedef struct vs_stats {
     size_t struct_size;        /* bytes vs_render wrote: the settings' stats_size */
@@ -163,6 +174,16 @@ typedef struct vs_stats {
     double ms_relevant;        /* building the relevant-voxel list (if rebuilt)  */
     double iso_lo, iso_hi, ramp; /* classification actually used                 */
     int pin_warning;           /* 1 if binding workers to cores failed           */
+
+    /* work counts, summed over tiles and threads: what each stage did, so
+     * that its time compares across machines and versions */
+    uint64_t bricks_culled;    /* bricks culled whole by the occlusion map       */
+    uint64_t voxels_projected; /* voxel-tile transforms (a voxel once per tile)  */
+    uint64_t voxels_tested;    /* occlusion tests of voxels                      */
+    uint64_t footprint_floats; /* floats added into sheet buffers (rasterize)    */
+    uint64_t pixels_classified;/* sheet pixels classified (gradient)             */
+    uint64_t pixels_shaded;    /* of those, with opacity: shaded and composited  */
+    vs_stage_bytes bytes_read, bytes_written;
 } vs_stats;
 
 /* A rendered image: straight RGBA float, row 0 at the top. */
@@ -284,6 +305,18 @@ typedef struct vs_image_diff {
 /* Over all four channels; psnr is +INFINITY for identical images. */
 VS_API vs_status vs_image_compare(vs_context *ctx, const vs_image *a, const vs_image *b,
                                   vs_image_diff *out);
+
+/* ---- profiling ---- */
+/* A timeline of frames: set vs_settings.trace to a trace and every vs_render
+ * with those settings appends its spans (the frame's serial parts on thread
+ * 0, the calling thread; per worker, each tile and inside it each stage of
+ * each sheet).  vs_trace_write saves them as Chrome Trace Event JSON, which
+ * Perfetto (ui.perfetto.dev) and chrome://tracing open.  A trace serves one
+ * vs_render at a time. */
+VS_API vs_status vs_trace_create(vs_trace **out);
+VS_API void vs_trace_release(vs_trace *t);
+VS_API size_t vs_trace_spans(const vs_trace *t); /* spans recorded so far */
+VS_API vs_status vs_trace_write(vs_context *ctx, const vs_trace *t, const char *path);
 
 /* Stats as JSON into buf, like snprintf: returns the bytes needed.  Writes
  * the fields st->struct_size covers; a size this library does not know

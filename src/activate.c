@@ -75,8 +75,10 @@ void vs_expand_brick(tile_state *ts, uint32_t b, int opening)
     const vs_brick *br = &F->rel->bricks[b];
     if (F->s->occlusion && *ts->opaque > 0 && box_occluded(t, ts->sat, bv->x0, bv->x1, bv->y0, bv->y1, bv->sc)) {
         ts->ws->culled += br->count;
+        ts->ws->bricks_culled++;
         return;
     }
+    ts->ws->projected += br->count;
     const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
     const float px = (float)F->pad_x, py = (float)F->pad_y;
     const float bx0 = (float)t->ox, bx1 = (float)(t->ox + t->bw - 1);
@@ -187,6 +189,7 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
                 memcpy(box, ts->abox[a], sizeof box);
                 sc = ts->abox[a][4];
             }
+            ts->ws->tested++;
             if (box_occluded(t, ts->sat, box[0], box[1], box[2], box[3], sc)) {
                 ts->ws->culled++;
                 e->kl = k - 1; /* dropped at the next update */
@@ -413,6 +416,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
             }
         unsigned live = F->kern.place_voxels(&bk->p[i0].x, (int)(sizeof(pend) / sizeof(float)), nb, &P, &pv);
         ts->ws->culled += (uint64_t)(nb - __builtin_popcount(live));
+        if (P.sat) ts->ws->tested += (uint64_t)nb;
         /* the splat weights of the batch's live voxels first: pre-shaded
          * ones read the shading tables at random (cache misses), which one
          * voxel at a time waited for between footprint adds */
@@ -463,6 +467,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
             const int ns = splat_voxel(&job);
             if (ns >= 0) {
                 ts->ws->splatted += (uint64_t)ns;
+                ts->ws->floats += 8 * (uint64_t)ns * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
                 continue;
             }
             /* a block too wide for the voxel kernels: built in memory once
@@ -480,6 +485,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                 float w8[8];
                 weights8(job.wv, D, st->gradient_splats ? pv.E[k - opening][lane] : 0.0f, &F->fp, w8);
                 F->kern.splat_block(ring[slot] + job.off, job.ds, src, bs, j1 - j0, v1 - v0, w8);
+                ts->ws->floats += 8 * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
                 rect_merge(&bbs[slot], &job.box);
             }
         }

@@ -15,6 +15,7 @@
  * each on its own cache lines so workers never share one. */
 typedef struct vs_worker_stats {
     _Alignas(64) uint64_t splatted, culled, sheets, tiles_total, tiles_shaded;
+    uint64_t bricks_culled, projected, tested, floats, px_classified, px_shaded;
     double ms_rasterize, ms_gradient, ms_shade, ms_composite;
 } vs_worker_stats;
 
@@ -71,6 +72,7 @@ typedef struct vs_frame {
     atomic_int tiles_done;
     vs_worker_stats *wstats;         /* one per worker                           */
     struct vs_tile_scratch *scratch; /* one per worker, the context's            */
+    struct vs_span_buf *spans;       /* one per worker when tracing, else NULL   */
     const struct vs_stages *stages;  /* what differs between the pipelines
                                         (pipeline.c)                            */
 } vs_frame;

@@ -77,6 +77,7 @@ void vs_raster1(const tile_ctx *t, const section *sec, const float w4[4], float 
     for (int y = ya; y <= yb; y++) {
         if (!row_footprint(t, sec, y, &xa, &xb, &cxr)) continue;
         t->F->kern.splat_row1(q + (size_t)y * t->stride + xa, t->ex + xa, w, xb - xa + 1);
+        t->ws->floats += (uint64_t)(xb - xa + 1);
         rect_grow(bb, xa, xb, y);
     }
 }
@@ -91,6 +92,7 @@ void vs_raster4(const tile_ctx *t, const section *sec, const float w4[4], float 
     for (int y = ya; y <= yb; y++) {
         if (!row_footprint(t, sec, y, &xa, &xb, &cxr)) continue;
         t->F->kern.splat_row4(buf + ((size_t)y * t->stride + xa) * 4, t->ex + xa, w, xb - xa + 1);
+        t->ws->floats += 4 * (uint64_t)(xb - xa + 1);
         rect_grow(bb, xa, xb, y);
     }
 }
@@ -165,6 +167,7 @@ static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const
     }
     const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
     rect_merge(bb, &box);
+    t->ws->floats += 8 * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
 }
 
 /* One section through the fused kernels; 0 when the block is too wide for
@@ -230,6 +233,7 @@ void vs_raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], 
     }
     const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
     rect_merge(bb, &box);
+    t->ws->floats += 8 * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
 }
 
 /* Density plus the three gradient splats dH/dx, dH/dy, dH/dz (FH'):
@@ -262,6 +266,7 @@ void vs_raster_gs(const tile_ctx *t, const section *sec, const float w4[4], floa
             p[2] += -2.0f * wD * h * (B * dx + rk * dy);
             p[3] += h * (wE - 2.0f * wD * (qzx * dxs + qzy * dy));
         }
+        t->ws->floats += 4 * (uint64_t)(xb - xa + 1);
         rect_grow(bb, xa, xb, y);
     }
 }

@@ -8,6 +8,7 @@
 #include "finish.h"
 #include "pool.h"
 #include "tile.h"
+#include "trace.h"
 
 #include <limits.h>
 #include <math.h>
@@ -214,8 +215,30 @@ static vs_tile_scratch *ensure_scratch(vs_context *ctx, int nthreads)
     return ctx->scratch;
 }
 
-static void free_frame(vs_frame *F)
+/* The bytes each stage reads and writes by construction, from the work
+ * counts: rasterization reads and writes every footprint float it adds;
+ * classification reads a pixel's channels (post-cd: of three sheets) and
+ * writes its opacity and gradient; shading reads gradient, opacity and
+ * the pixel's density or colour and writes a colour; compositing reads the
+ * accumulator, opacity and colour and writes the accumulator. */
+static void stage_bytes(const vs_frame *F, vs_stats *st)
 {
+    const uint64_t ch = (uint64_t)F->stages->ch, sheets_read = F->stages->ahead ? 3 : 1;
+    const uint64_t px = st->pixels_classified, vis = st->pixels_shaded;
+    st->bytes_read.rasterize = 4 * st->footprint_floats;
+    st->bytes_written.rasterize = 4 * st->footprint_floats;
+    st->bytes_read.gradient = 4 * ch * sheets_read * px;
+    st->bytes_written.gradient = 16 * px;
+    st->bytes_read.shade = (16 + 4 * ch) * vis;
+    st->bytes_written.shade = 12 * vis;
+    st->bytes_read.composite = 32 * px;
+    st->bytes_written.composite = 16 * vis;
+}
+
+static void free_frame(vs_frame *F, int nspans)
+{
+    for (int w = 0; F->spans && w < nspans; w++) free(F->spans[w].s);
+    free(F->spans);
     vs_footprint_free(&F->fp);
     vs_block_free(&F->blk);
     vs_block_free(&F->skew);
@@ -320,9 +343,19 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     if ((rc = ensure_pool(ctx, s)) != VS_OK) goto fail;
     double t_rel = vs_now_ms();
     if ((rc = vs_relevant_get(ctx, ctx->pool, vol, F.cls, seam, &F.rel, &rebuilt)) != VS_OK) goto fail;
-    double ms_relevant = rebuilt ? vs_now_ms() - t_rel : 0.0;
+    const double t_rel_end = vs_now_ms();
+    double ms_relevant = rebuilt ? t_rel_end - t_rel : 0.0;
     F.vol = vol;
     int nthreads = vs_pool_threads(ctx->pool);
+    if (s->trace) {
+        F.spans = calloc((size_t)nthreads, sizeof *F.spans);
+        if (!F.spans) {
+            rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory for the trace");
+            goto fail;
+        }
+        vs_span_add(&F.spans[0], VS_SPAN_SETUP, 0, -1, t_start, t_rel);
+        if (rebuilt) vs_span_add(&F.spans[0], VS_SPAN_RELEVANT, 0, -1, t_rel, t_rel_end);
+    }
 
     double t_setup = vs_now_ms();
     const int W = s->width, H = s->height;
@@ -375,7 +408,8 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     }
     J.fill = 1;
     vs_pool_run(ctx->pool, J.nchunks, bin_task, &J);
-    double ms_setup = vs_now_ms() - t_setup;
+    const double t_bin_end = vs_now_ms();
+    double ms_setup = t_bin_end - t_setup;
 
     /* tiles with the most bricks first, so the last tasks handed out are
      * short ones and the workers finish together; order never changes a
@@ -399,7 +433,12 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         free(key);
     }
     F.image = image;
+    const double t_tiles = vs_now_ms();
     vs_pool_run(ctx->pool, F.ntiles, vs_tile_render, &F);
+    if (F.spans) {
+        vs_span_add(&F.spans[0], VS_SPAN_BIN, 0, -1, t_setup, t_bin_end);
+        vs_span_add(&F.spans[0], VS_SPAN_TILES, 0, -1, t_tiles, vs_now_ms());
+    }
     if (atomic_load(&F.error)) {
         rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory in a tile");
         goto fail;
@@ -434,7 +473,14 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
             st->ms_stage.gradient += ws->ms_gradient;
             st->ms_stage.shade += ws->ms_shade;
             st->ms_stage.composite += ws->ms_composite;
+            st->bricks_culled += ws->bricks_culled;
+            st->voxels_projected += ws->projected;
+            st->voxels_tested += ws->tested;
+            st->footprint_floats += ws->floats;
+            st->pixels_classified += ws->px_classified;
+            st->pixels_shaded += ws->px_shaded;
         }
+        stage_bytes(&F, st);
         st->ms_stage.setup = (t_setup - t_start - ms_relevant) + ms_setup;
         st->ms_relevant = ms_relevant;
         st->iso_lo = F.cls->lo;
@@ -443,13 +489,19 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         st->pin_warning = vs_pool_pin_failed(ctx->pool);
         st->ms_total = vs_now_ms() - t_start;
     }
+    if (F.spans) {
+        vs_span_add(&F.spans[0], VS_SPAN_FRAME, 0, -1, t_start, vs_now_ms());
+        for (int w = 0; w < nthreads; w++)
+            if (!vs_trace_append(s->trace, &F.spans[w])) break;
+        vs_trace_frame_done(s->trace);
+    }
     free(J.counts);
-    free_frame(&F);
+    free_frame(&F, nthreads);
     return VS_OK;
 fail:
     free(J.counts);
     free(image);
-    free_frame(&F);
+    free_frame(&F, F.spans ? vs_pool_threads(ctx->pool) : 0);
     return rc;
 }
 
@@ -469,9 +521,19 @@ vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *se
     vs_stats st_full, *st = stats ? &st_full : NULL;
     rc = check_settings(ctx, s);
     if (rc != VS_OK) return rc;
-    if (s->pipeline == VS_PIPELINE_RAYCAST)
+    if (s->pipeline == VS_PIPELINE_RAYCAST) {
+        const double t0 = vs_now_ms();
         rc = vs_raycast_render(ctx, vol, s, out, st);
-    else if (s->isa > VS_ISA_SCALAR && s->isa > vs_isa_detect())
+        if (rc == VS_OK && s->trace) { /* one span: its rows are not traced */
+            vs_span_buf b = {0};
+            const double t1 = vs_now_ms();
+            vs_span_add(&b, VS_SPAN_FRAME, 0, -1, t0, t1);
+            vs_span_add(&b, VS_SPAN_RAYCAST, 0, -1, t0, t1);
+            vs_trace_append(s->trace, &b);
+            vs_trace_frame_done(s->trace);
+            free(b.s);
+        }
+    } else if (s->isa > VS_ISA_SCALAR && s->isa > vs_isa_detect())
         /* asking for more than the CPU has is a usage error, not a fallback */
         rc = vs_set_error(ctx, VS_ERR_UNSUPPORTED, "ISA %s is not supported by this CPU (best: %s)",
                           vs_isa_name(s->isa), vs_isa_name(vs_isa_detect()));

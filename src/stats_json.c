@@ -168,6 +168,29 @@ size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap)
     if (HAS(iso_hi)) kv_dbl(&o, "iso_hi", st->iso_hi);
     if (HAS(ramp)) kv_dbl(&o, "ramp", st->ramp);
     if (HAS(pin_warning)) kv_int(&o, "pin_warning", st->pin_warning);
+    if (HAS(bricks_culled)) kv_u64(&o, "bricks_culled", st->bricks_culled);
+    if (HAS(voxels_projected)) kv_u64(&o, "voxels_projected", st->voxels_projected);
+    if (HAS(voxels_tested)) kv_u64(&o, "voxels_tested", st->voxels_tested);
+    if (HAS(footprint_floats)) kv_u64(&o, "footprint_floats", st->footprint_floats);
+    if (HAS(pixels_classified)) kv_u64(&o, "pixels_classified", st->pixels_classified);
+    if (HAS(pixels_shaded)) kv_u64(&o, "pixels_shaded", st->pixels_shaded);
+    for (int rw = 0; rw < 2; rw++) {
+        const vs_stage_bytes *b = rw ? &st->bytes_written : &st->bytes_read;
+        if (!(rw ? HAS(bytes_written) : HAS(bytes_read))) continue;
+        key(&o, "  ", rw ? "bytes_written" : "bytes_read");
+        put_str(&o, "{\n");
+        const struct {
+            const char *name;
+            uint64_t v;
+        } stage[4] = {{"rasterize", b->rasterize}, {"gradient", b->gradient}, {"shade", b->shade},
+                      {"composite", b->composite}};
+        for (int i = 0; i < 4; i++) {
+            key(&o, "    ", stage[i].name);
+            put_fmt(&o, "%" PRIu64, stage[i].v);
+            put_str(&o, i < 3 ? ",\n" : "\n");
+        }
+        put_str(&o, "  },\n");
+    }
 #undef HAS
     key(&o, "  ", "version");
     put_json_string(&o, VS_VERSION_STRING);

@@ -14,6 +14,7 @@
 #include "activate.h"
 #include "composite.h"
 #include "occlusion.h"
+#include "trace.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -66,6 +67,24 @@ static int scratch_reserve(vs_tile_scratch *s, size_t bytes, size_t zero)
     return 1;
 }
 
+/* Work counts of a sheet's classification: the span pixels, and those
+ * with opacity (shaded and composited). */
+static void count_pixels(const tile_ctx *t, const spans *sp, const float *alpha, vs_worker_stats *ws)
+{
+    uint64_t n = 0, vis = 0;
+    for (int y = sp->y0; y < sp->y1; y++) {
+        const int w = sp->xb[y] - sp->xa[y];
+        if (w <= 0) continue;
+        const float *a = alpha + (y - 1) * t->tw + (sp->xa[y] - 1);
+        int v = 0;
+        for (int i = 0; i < w; i++) v += a[i] > 0.0f; /* vectorises */
+        n += (uint64_t)w;
+        vis += (uint64_t)v;
+    }
+    ws->px_classified += n;
+    ws->px_shaded += vis;
+}
+
 /* A bucket array no sheet reads again: the largest is kept for the next
  * tile's first bucket. */
 static void keep_or_free(vs_tile_scratch *s, pend *p, int cap)
@@ -87,6 +106,7 @@ void vs_tile_render(void *arg, int worker, int task)
     const vs_stages *st = F->stages;
     vs_worker_stats *ws = &F->wstats[worker];
     vs_tile_scratch *scr = &F->scratch[worker];
+    vs_span_buf *tr = F->spans ? &F->spans[worker] : NULL; /* tracing */
     if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) return;
     if (worker == 0 && s->progress) {
         double frac = (double)atomic_load(&F->tiles_done) / F->ntiles;
@@ -95,8 +115,10 @@ void vs_tile_render(void *arg, int worker, int task)
     task = F->tile_order[task];
     const int W = F->cam.width, T = F->tile;
     const int tx = task % F->tiles_x, ty = task / F->tiles_x;
+    const double t_tile = tr ? vs_now_ms() : 0.0;
     tile_ctx t;
     t.F = F;
+    t.ws = ws;
     t.fp = &F->fp;
     t.x0 = tx * T;
     t.y0 = ty * T;
@@ -226,14 +248,20 @@ void vs_tile_render(void *arg, int worker, int task)
         const int cur = (k - kbase) % R, prev = (k - 1 - kbase + R) % R, nxt = (k + 1 - kbase) % R;
         const int opening = k + ahead;
         if (opening <= kmax) {
-            double t0 = vs_now_ms();
+            const double t0 = vs_now_ms();
             while (next_brick < nbr && kfb[order[next_brick]] == opening)
                 vs_expand_brick(&ts, ent[order[next_brick++]], opening);
+            const double tp = tr ? vs_now_ms() : 0.0;
             if (multi)
                 st->activate(&ts, opening, ring, bbox, R, kbase);
             else
                 vs_rasterize_sheet(&ts, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R]);
-            ws->ms_rasterize += vs_now_ms() - t0;
+            const double t1 = vs_now_ms();
+            ws->ms_rasterize += t1 - t0;
+            if (tr) {
+                vs_span_add(tr, VS_SPAN_PROJECT, worker, task, t0, tp);
+                vs_span_add(tr, VS_SPAN_SPLAT, worker, task, tp, t1);
+            }
             if (ts.failed) {
                 atomic_store(&F->error, 1);
                 break;
@@ -265,15 +293,17 @@ void vs_tile_render(void *arg, int worker, int task)
             const sheet_view sv = {.k = k, .q = ring[cur], .prev = ring[prev], .next = ring[nxt], .sp = &sp,
                                    .tabs = &tabs, .acc = acc};
             /* 1. classification + gradients */
-            double t0 = vs_now_ms();
+            const double t0 = vs_now_ms();
             st->classify(&t, &sv, sb);
-            double t1 = vs_now_ms();
+            const double t1 = vs_now_ms();
+            count_pixels(&t, &sp, sb.alpha, ws);
             /* 2. shading: colour per pixel */
             st->shade(&t, &sv, sb);
-            double t2 = vs_now_ms();
+            const double t2 = vs_now_ms();
             /* 3. front-to-back compositing; the accumulated opacity is the
              * tile's occlusion map */
             opaque += vs_composite_sheet(&t, &sp, acc, sb, thr, &sat_from);
+            const double tc = tr ? vs_now_ms() : 0.0;
             if (s->occlusion) {
                 for (int y = sp.y0; y < sp.y1; y++)
                     if (sp.xa[y] != sp.xb[y]) vs_shrink_live(&t, acc, y - 1, live0, live1);
@@ -283,7 +313,13 @@ void vs_tile_render(void *arg, int worker, int task)
                     sat_from = 1 << 30;
                 }
             }
-            double t3 = vs_now_ms();
+            const double t3 = vs_now_ms();
+            if (tr) {
+                vs_span_add(tr, VS_SPAN_CLASSIFY, worker, task, t0, t1);
+                vs_span_add(tr, VS_SPAN_SHADE, worker, task, t1, t2);
+                vs_span_add(tr, VS_SPAN_COMPOSITE, worker, task, t2, tc);
+                vs_span_add(tr, VS_SPAN_OCCLUSION, worker, task, tc, t3);
+            }
             ws->ms_gradient += t1 - t0;
             ws->ms_shade += t2 - t1;
             ws->ms_composite += t3 - t2;
@@ -303,5 +339,6 @@ void vs_tile_render(void *arg, int worker, int task)
     scr->active = ts.active;
     scr->abox = ts.abox;
     scr->cap_active = ts.cap_active;
+    if (tr) vs_span_add(tr, VS_SPAN_TILE, worker, task, t_tile, vs_now_ms());
     atomic_fetch_add(&F->tiles_done, 1);
 }

@@ -56,6 +56,7 @@ typedef struct tile_ctx {
     float ry0;           /* footprint half-height without shift              */
     float *blk;          /* scratch: one voxel's footprint block             */
     float *ex;           /* scratch: one footprint row of weights (bw)       */
+    vs_worker_stats *ws; /* the worker's counters                            */
 } tile_ctx;
 
 static inline void rect_grow(rect *bb, int xa, int xb, int y)

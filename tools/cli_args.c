@@ -79,7 +79,7 @@ enum opt_id {
     O_TF, O_SIZE, O_VIEW, O_ZOOM, O_PERSPECTIVE, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
-    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_QUIET,
+    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
     O_TURNTABLE, O_FPS
 };
 
@@ -138,6 +138,7 @@ static const opt_def opt_table[] = {
     {"--bits", 1, O_BITS, 0},
     {"--stats", 1, O_STATS, 0},
     {"--print-stats", 0, O_PRINT_STATS, 0},
+    {"--trace", 1, O_TRACE, 0},
     {"-q", 0, O_QUIET, 0},
     {"--quiet", 0, O_QUIET, 0},
 };
@@ -387,6 +388,10 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
         o->stats_path = v;
         return 0;
     case O_PRINT_STATS: o->print_stats = 1; return 0;
+    case O_TRACE:
+        if (!*v) return fail(err, cap, "--trace: expected a file name");
+        o->trace_path = v;
+        return 0;
     case O_QUIET: o->quiet = 1; return 0;
     }
     return fail(err, cap, "%s: unhandled option", n);
@@ -475,6 +480,10 @@ static int parse_common(int argc, char **argv, cli_opts *o, int is_info, char *e
         }
         if (o->stats_path && !strcmp(o->stats_path, o->output))
             return fail(err, cap, "--stats: %s is also the output image", o->stats_path);
+        if (o->trace_path && !strcmp(o->trace_path, o->output))
+            return fail(err, cap, "--trace: %s is also the output image", o->trace_path);
+        if (o->trace_path && o->stats_path && !strcmp(o->trace_path, o->stats_path))
+            return fail(err, cap, "--trace: %s is also the --stats file", o->trace_path);
     }
     return 0;
 }
@@ -551,6 +560,8 @@ void cli_render_usage(FILE *f)
             "  --bits 8|16            PNG bit depth (default 8)\n"
             "  --stats FILE.json      per-stage timings and counts as JSON (- : on stdout)\n"
             "  --print-stats          per-stage timing table on stdout\n"
+            "  --trace FILE.json      timeline of every thread's tiles and stages (Chrome Trace\n"
+            "                         Event format: open in ui.perfetto.dev or chrome://tracing)\n"
             "  -q                     quiet: no summary line and no notes\n"
             "pipeline and classification:\n"
             "  --pipeline P           pre | post-cd | post-gs | post-alpha | raycast (default post-cd)\n"

@@ -18,6 +18,7 @@ typedef struct cli_opts {
     const char *output;     /* -o OUT                                     */
     const char *stats_path; /* --stats FILE.json                          */
     int print_stats;        /* --print-stats                              */
+    const char *trace_path; /* --trace FILE.json: a timeline of the frames */
     int quiet;              /* -q                                         */
     int bits;               /* --bits 8|16 (PNG depth)                    */
     int help;               /* --help seen: print usage, exit 0           */

@@ -201,6 +201,15 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
     }
     vs_stats stats;
     memset(&stats, 0, sizeof stats);
+    vs_trace *trace = NULL;
+    if (o->trace_path) {
+        if (vs_trace_create(&trace) != VS_OK) {
+            fprintf(stderr, "vsplat: %s: out of memory\n", o->trace_path);
+            free(frames);
+            return EXIT_INTERNAL;
+        }
+        o->s.trace = trace;
+    }
     double ms_all = 0.0;
     int rc = 0, written = 0;
     char name[4200];
@@ -234,6 +243,12 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
         }
     }
     if (sequence && rc) remove_frames(o, written);
+    if (!rc && trace) {
+        vs_status st = vs_trace_write(ctx, trace, o->trace_path);
+        if (st != VS_OK) rc = report(ctx, st, o->trace_path);
+    }
+    o->s.trace = NULL;
+    vs_trace_release(trace);
 
     /* --stats -: the JSON goes to stdout once everything is written */
     const int stats_file = o->stats_path && strcmp(o->stats_path, "-") != 0;
@@ -296,6 +311,7 @@ static int cmd_render(int argc, char **argv)
     }
     if (check_writable_dir(o.output, err, sizeof err)) return usage_error(err);
     if (o.stats_path && check_writable_dir(o.stats_path, err, sizeof err)) return usage_error(err);
+    if (o.trace_path && check_writable_dir(o.trace_path, err, sizeof err)) return usage_error(err);
 
     vs_context *ctx = NULL;
     vs_status st = vs_context_create(&ctx);
