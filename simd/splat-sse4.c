@@ -15,12 +15,3 @@ void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n)
         _mm_storeu_ps(row4 + 4 * i, _mm_add_ps(_mm_loadu_ps(row4 + 4 * i), _mm_mul_ps(vw, h)));
     }
 }
-
-void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n)
-{
-    __m128 vc = _mm_loadu_ps(c);
-    for (int i = 0; i < n; i++) {
-        __m128 h = _mm_set_ps(ex[i], ex[i], exd[i], ex[i]); /* lanes: h, exd, h, h */
-        _mm_storeu_ps(row4 + 4 * i, _mm_add_ps(_mm_loadu_ps(row4 + 4 * i), _mm_mul_ps(vc, h)));
-    }
-}

@@ -23,18 +23,6 @@ void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n)
     }
 }
 
-void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n)
-{
-    for (int i = 0; i < n; i++) {
-        float h = ex[i];
-        float *p = row4 + 4 * i;
-        p[0] += c[0] * h;
-        p[1] += c[1] * exd[i];
-        p[2] += c[2] * h;
-        p[3] += c[3] * h;
-    }
-}
-
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr)
 {
     int crossed = 0;

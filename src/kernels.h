@@ -103,9 +103,6 @@ typedef struct vs_kernels {
     void (*splat_row1)(float *row, const float *ex, float w, int n);
     /* row4[4i + c] += w[c] * ex[i]: four interleaved channels */
     void (*splat_row4)(float *row4, const float *ex, const float w[4], int n);
-    /* gradient splats: row4[4i] += c[0] ex[i], [4i+1] += c[1] exd[i],
-     * [4i+2] += c[2] ex[i], [4i+3] += c[3] ex[i] */
-    void (*splat_row_gs)(float *row4, const float *ex, const float *exd, const float c[4], int n);
     /* front-to-back over one span: for alpha[i] > 0,
      *   w = (1 - acc[4i+3]) * alpha[i]; acc[4i+c] += w * rgb[3i+c]; acc[4i+3] += w (<= 1);
      * returns how many pixels crossed the opacity threshold thr */
@@ -191,7 +188,6 @@ unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_plac
 unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 void vs_splat_row1_scalar(float *row, const float *ex, float w, int n);
 void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n);
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);
 void vs_splat_block_mix_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                                const float m[12]);
@@ -238,9 +234,7 @@ int vs_project_brick_avx512(const uint16_t *vox, int n, const vs_project_in *P, 
 /* The per-ISA versions in simd/ (declared once here for the dispatch, the
  * tests and the kernel benchmark; call them only where the CPU has the ISA). */
 void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
 void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
 void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
 typedef void (*vs_splat_block_fn)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                                   const float w8[8]);
