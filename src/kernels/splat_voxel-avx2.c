@@ -1,7 +1,7 @@
 /* One density voxel into all its sheets, AVX2: each 8-pixel vector of a
  * footprint row is built once in a register (column weights times the row
  * weight, zeroed outside the radius) and added to every sheet; multiply then
- * add as the scalar reference (src/kernels.c; no FMA, src/kernels.h). */
+ * add as the scalar reference (scalar.c; no FMA, kernels.h). */
 #include "kernels.h"
 
 #include <immintrin.h>

@@ -1,8 +1,8 @@
 /* Footprint row accumulation for interleaved channels, SSE4.1: one RGBA (or
  * density + gradient) pixel per vector, one multiply and one add per element
- * exactly as the scalar reference (see src/kernels.h).  Single-channel rows
+ * exactly as the scalar reference (see kernels.h).  Single-channel rows
  * and compositing have no SSE version: GCC auto-vectorizes the scalar row
- * loop as well, and a per-pixel SSE composite measured slower (simd/README). */
+ * loop as well, and a per-pixel SSE composite measured slower (docs/PERFORMANCE.md). */
 #include "kernels.h"
 
 #include <smmintrin.h>

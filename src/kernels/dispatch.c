@@ -1,6 +1,6 @@
 /* Kernel selection: the scalar reference first, then each kernel upgraded
  * to the best ISA that this CPU and the cap allow, where a version exists
- * (only where it measured faster: `vsplat-bench kernels`, simd/README.md).
+ * (only where it measured faster: `vsplat-bench kernels`, docs/PERFORMANCE.md).
  * The choice lives in the caller's table (one per frame), never in a
  * global. */
 #include "kernels.h"

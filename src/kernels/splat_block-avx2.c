@@ -1,6 +1,6 @@
 /* Footprint blocks into a sheet, AVX2: one block vector per register,
- * multiply then add exactly as the scalar reference (src/kernels.c; no FMA,
- * see src/kernels.h).  A one-vector row (the common 8-pixel density
+ * multiply then add exactly as the scalar reference (scalar.c; no FMA,
+ * see kernels.h).  A one-vector row (the common 8-pixel density
  * footprint) is the unrolled special case. */
 #include "kernels.h"
 

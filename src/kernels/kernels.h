@@ -1,7 +1,8 @@
 /* The inner loops that SIMD code may replace, as a table of function
  * pointers chosen per frame (libjpeg-turbo style): filled with the scalar
- * reference in src/kernels.c first, then upgraded best ISA first by
- * simd/dispatch.c, capped by the settings and VSPLAT_ISA.
+ * reference (scalar.c) first, then upgraded best ISA first by dispatch.c,
+ * capped by the settings and VSPLAT_ISA.  Each family has one file per ISA,
+ * FAMILY-ISA.c, built with that ISA's flags (cmake/SimdFlags.cmake).
  *
  * Every kernel does one multiply and one add per element in the same order
  * as the scalar reference (no fused multiply-add), so each ISA gives
@@ -181,7 +182,7 @@ typedef struct vs_kernels {
     unsigned (*place_voxels)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 } vs_kernels;
 
-/* Scalar reference kernels (src/kernels.c). */
+/* Scalar reference kernels (scalar.c). */
 typedef unsigned (*vs_place_voxels_fn)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
@@ -231,7 +232,7 @@ int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, 
 int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx512(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 
-/* The per-ISA versions in simd/ (declared once here for the dispatch, the
+/* The per-ISA versions, FAMILY-ISA.c (declared once here for the dispatch, the
  * tests and the kernel benchmark; call them only where the CPU has the ISA). */
 void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
 void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
@@ -251,7 +252,7 @@ typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n
 typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
                                 const vs_shade_tabs *T);
 /* post-shaded sheet kernels: AVX2 only (AVX-512 versions were slower in the
- * frame, simd/README.md) */
+ * frame, docs/PERFORMANCE.md) */
 int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
 void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                          int n, const vs_shade_tabs *T);
@@ -259,7 +260,7 @@ void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const v
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports
- * (simd/dispatch.c). */
+ * (dispatch.c). */
 void vs_kernels_init(vs_kernels *k, vs_isa cap);
 /* The ISA cap from VSPLAT_ISA (VS_ISA_AUTO if unset or unknown). */
 vs_isa vs_isa_from_env(void);

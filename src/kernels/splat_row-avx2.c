@@ -1,6 +1,6 @@
 /* Footprint row accumulation for interleaved channels, AVX2: two pixels per
  * vector, multiply then add as the scalar reference (no FMA: see
- * src/kernels.h). */
+ * kernels.h). */
 #include "kernels.h"
 
 #include <immintrin.h>

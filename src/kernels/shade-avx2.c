@@ -1,5 +1,5 @@
-/* AVX2 versions of the post-shaded per-sheet kernels (src/kernels.h),
- * 8 pixels a step, bit-identical to src/kernels.c: the table coordinate in
+/* AVX2 versions of the post-shaded per-sheet kernels (kernels.h),
+ * 8 pixels a step, bit-identical to scalar.c: the table coordinate in
  * double as the reference, truncation by cvtt, lrintf as cvtps (round to
  * nearest), one multiply and one add per element, IEEE division.  Tails go
  * to the scalar reference (pixels are independent). */
@@ -48,7 +48,7 @@ static inline void load3(const float *p, __m256 *x, __m256 *y, __m256 *z)
     *z = _mm256_permutevar8x32_ps(bz, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
 }
 
-/* the opacity table at v (as lookup_alpha in src/kernels.c) */
+/* the opacity table at v (as lookup_alpha in scalar.c) */
 static inline __m256 lookup_alpha8(const vs_shade_tabs *T, __m256 v)
 {
     const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
