@@ -219,11 +219,8 @@ static double edge_width(const vs_image *img)
 
 static void test_cube_edges(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "cube", &v) != VS_OK) {
-        CHECK(0, "cube scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "cube");
+    if (!v) return;
     double w[4];
     for (int p = 0; p < 4; p++) {
         vs_settings s;
@@ -260,11 +257,8 @@ static double f_ball(int i, int j, int k)
 static void test_invariance_of(vs_volume *v, const char *name);
 static void test_invariance(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "ml", &v) != VS_OK) {
-        CHECK(0, "ml scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "ml");
+    if (!v) return;
     test_invariance_of(v, "ml");
     vs_volume_release(v);
     const int dims[3] = {32, 32, 20};
@@ -371,11 +365,8 @@ static void test_invariance_of(vs_volume *v, const char *name)
  * and sizes first must give the same image as a fresh one. */
 static void test_shading_table_cache(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "sphere", &v) != VS_OK) {
-        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "sphere");
+    if (!v) return;
     vs_settings s[4];
     for (int i = 0; i < 4; i++) {
         vs_settings_init(&s[i]);
@@ -421,8 +412,7 @@ static void test_context_reuse(void)
     const char *scenes[] = {"cube", "sphere", "ml"};
     vs_volume *v[3];
     for (int i = 0; i < 3; i++)
-        if (vs_volume_scene(ctx, scenes[i], &v[i]) != VS_OK) {
-            CHECK(0, "%s scene: %s", scenes[i], vs_last_error(ctx));
+        if (!(v[i] = tu_scene(ctx, scenes[i]))) {
             for (int j = 0; j < i; j++) vs_volume_release(v[j]);
             return;
         }
@@ -535,11 +525,8 @@ static double psnr_rgb(const vs_image *a, const vs_image *b)
 
 static void test_against_raycaster(const char *scene, int analytic, int size, double fov, double min_post_cd)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, scene, &v) != VS_OK) {
-        CHECK(0, "%s scene: %s", scene, vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, scene);
+    if (!v) return;
     vs_settings s;
     vs_settings_init(&s);
     s.width = s.height = size;
@@ -583,11 +570,8 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
  * pixels), 10 % larger than the orthographic f R / D. */
 static void test_perspective_silhouette(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "sphere", &v) != VS_OK) {
-        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "sphere");
+    if (!v) return;
     vs_settings s;
     vs_settings_init(&s);
     s.width = s.height = 256;

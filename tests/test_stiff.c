@@ -136,16 +136,6 @@ static vs_volume *disc_volume(int n)
     return v;
 }
 
-static vs_volume *scene(const char *spec)
-{
-    vs_volume *v = NULL;
-    if (vs_volume_scene(ctx, spec, &v) != VS_OK) {
-        CHECK(0, "scene %s: %s", spec, vs_last_error(ctx));
-        return NULL;
-    }
-    return v;
-}
-
 /* ------------------------------------------------------------ measuring */
 
 static int image_sane(const vs_image *img, char *why, size_t cap)
@@ -531,7 +521,7 @@ static void cases_zero_gradient(void)
     s.iso_opacity = 0.02f;
     run_case("constant 24^3, translucent", c, &s, REF_GAUSS, 24, 14, 0, "every interior sample has gradient 0");
     vs_volume_release(c);
-    vs_volume *cube = scene("cube");
+    vs_volume *cube = tu_scene(ctx, "cube");
     base_settings(&s);
     s.iso_opacity = 0.05f;
     /* measured post 40.8, pre 24.6 */
@@ -698,7 +688,7 @@ int main(void)
     double t0 = now_ms();
     printf("PSNR in dB against the reference, columns pre, post-cd, post-gs, post-alpha%s\n",
            quick ? " (quick mode: small images, no 128^3/256^3)" : "");
-    vs_volume *sphere = scene("sphere:64");
+    vs_volume *sphere = tu_scene(ctx, "sphere:64");
     vs_volume *ml = ml_volume(41, 6);
     cases_ml();
     cases_slab(sphere);
