@@ -10,9 +10,9 @@
  *
  * Each case records the PSNR of every pipeline against its reference and the
  * time it took; the table is printed and written as markdown to
- * $VSPLAT_STIFF_TABLE (default: stiff_cases.md in the working folder, which
- * CTest sets to the build folder's tests/).  README.md "Stiff cases" holds a
- * copy.  VSPLAT_TEST_QUICK=1 (the sanitizer builds) shrinks images and drops
+ * $VSPLAT_STIFF_TABLE (default: stiff_cases.md in the build folder's tests/,
+ * wherever the test is run from: the table is output, never a file of the
+ * repository).  VSPLAT_TEST_QUICK=1 (the sanitizer builds) shrinks images and drops
  * the 256^3 volume.
  *
  * Tolerances.  PSNR is over premultiplied RGBA (as in test_splat.c), so the
@@ -707,7 +707,7 @@ int main(void)
     printf("\n%d cases, %.1f s, image %dx%d\n\n", nrows, (now_ms() - t0) / 1e3, img_n, img_n);
     write_table(stdout);
     const char *out = getenv("VSPLAT_STIFF_TABLE");
-    if (!out || !*out) out = "stiff_cases.md";
+    if (!out || !*out) out = VSPLAT_TEST_BINARY_DIR "/stiff_cases.md";
     FILE *f = fopen(out, "w");
     if (f) {
         fprintf(f, "Stiff cases (tests/test_stiff.c), %dx%d images unless noted, PSNR in dB vs the reference%s\n\n",
