@@ -80,15 +80,12 @@ const char *bench_data_dir(const char *override);
  * (a synthetic scene).  Returns 1 and prints "skipped" if the file is absent,
  * 0 on success, -1 on a load error (message printed). */
 int bench_load(const bench_opts *o, const char *key, vs_volume **out);
-const char *bench_input_file(const char *key); /* file name of a real input, or NULL */
 
 /* ---- results.c ---- */
 /* Create the results folder (and parents).  Returns 0 or prints and returns 1. */
 int bench_results_dir(const bench_opts *o);
 /* Open OUT/NAME for writing ("w"); prints a message on failure. */
 FILE *bench_result_open(const bench_opts *o, const char *name);
-/* Path OUT/NAME into buf. */
-void bench_result_path(const bench_opts *o, const char *name, char *buf, size_t cap);
 /* "model name" of the CPU and the logical CPU count, for headers. */
 const char *bench_machine(void);
 /* 1-minute load average (/proc/loadavg): a shared machine makes timings noisy. */

@@ -36,12 +36,6 @@ static const input_def *find_input(const char *key)
     return NULL;
 }
 
-const char *bench_input_file(const char *key)
-{
-    const input_def *d = find_input(key);
-    return d ? d->file : NULL;
-}
-
 const char *bench_data_dir(const char *override)
 {
     static char buf[4096];

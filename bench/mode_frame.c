@@ -5,8 +5,9 @@
  * then one render with iso_lo moved (the list is rebuilt): iso_change_ms is
  * that render's whole wall clock (rebuild + frame, what a user waits for;
  * stderr splits it); peak_mb is getrusage's ru_maxrss.  Every `vsplat render`
- * option works (tools/cli_args.c is linked in); -o OUT, if given, receives
- * the first frame.  stdout gets exactly one line:
+ * option works (the CLI's parser, tools/cli_args.c, linked as the
+ * vsplat_cli_args library); -o OUT, if given, receives the first frame.
+ * stdout gets exactly one line:
  *   median_ms=... min_ms=... max_ms=... iso_change_ms=... peak_mb=... */
 #include "bench.h"
 #include "cli_args.h"

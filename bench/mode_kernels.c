@@ -1,5 +1,5 @@
 /* vsplat-bench kernels: one function at a time (like zstd's fullbench).
- * Every SIMD kernel of src/kernels.h against the scalar reference, on each
+ * Every SIMD kernel of src/kernels/kernels.h against the scalar reference, on each
  * ISA this CPU has, at footprint-row lengths that occur in practice (a
  * footprint of radius 2 voxels spans ~9 pixels at 512^2 on a 181^3 head) and
  * longer ones; then the machine's measured peak FMA rate for scale; then the
@@ -15,7 +15,7 @@
 typedef struct kernel_entry {
     const char *kernel;
     vs_isa isa;
-    int kind; /* 0 row1, 1 row4, 2 gs, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
+    int kind; /* 0 row1, 1 row4, 3 composite, 4 footprint block, 5 classify_cd, 6 shade_lut, 7 classify_gs,
                  8 gradient-splat block (mixing), 9 project_brick (8n voxels),
                  10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets),
                  12 place_voxels (n voxels in batches of 16),
@@ -104,7 +104,7 @@ static void shade_bench_init(shade_bench *B)
 }
 
 /* Time `reps` calls over a buffer of rows; returns ns per element. */
-static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, float *exd, float *alpha, float *rgb,
+static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, float *alpha, float *rgb,
                           shade_bench *B, long reps)
 {
     const float w4[4] = {0.25f, 0.5f, 0.75f, 1.0f};
@@ -118,10 +118,6 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
             case 0: ((void (*)(float *, const float *, float, int))k->fn)(buf + off, ex + off, 1e-3f, n); break;
             case 1:
                 ((void (*)(float *, const float *, const float *, int))k->fn)(buf + 4 * off, ex + off, w4, n);
-                break;
-            case 2:
-                ((void (*)(float *, const float *, const float *, const float *, int))k->fn)(buf + 4 * off, ex + off,
-                                                                                         exd + off, w4, n);
                 break;
             case 4:
                 ((vs_splat_block_fn)k->fn)(buf + off, BLOCK_DS, ex, 8 * block_nvec(n), BLOCK_ROWS, block_nvec(n), w8);
@@ -230,9 +226,6 @@ int bench_kernels(const bench_opts *o)
         {"splat_row4", VS_ISA_SSE4, 1, (void *)vs_splat_row4_sse4},
         {"splat_row4", VS_ISA_AVX2, 1, (void *)vs_splat_row4_avx2},
         {"splat_row4", VS_ISA_AVX512, 1, (void *)vs_splat_row4_avx512},
-        {"splat_row_gs", VS_ISA_SCALAR, 2, (void *)vs_splat_row_gs_scalar},
-        {"splat_row_gs", VS_ISA_SSE4, 2, (void *)vs_splat_row_gs_sse4},
-        {"splat_row_gs", VS_ISA_AVX2, 2, (void *)vs_splat_row_gs_avx2},
         {"composite", VS_ISA_SCALAR, 3, (void *)vs_composite_scalar},
         {"composite", VS_ISA_AVX2, 3, (void *)vs_composite_avx2},
         {"splat_block", VS_ISA_SCALAR, 4, (void *)vs_splat_block_scalar},
@@ -269,17 +262,16 @@ int bench_kernels(const bench_opts *o)
     /* rows of 4 channels, or BLOCK_ROWS sheet rows of a block */
     const size_t nbuf = (size_t)4 * SHEET_STEP + 64 > (size_t)nmax * 4 ? (size_t)4 * SHEET_STEP + 64 : (size_t)nmax * 4;
     float *buf = calloc(nbuf, sizeof(float)), *ex = malloc((size_t)8 * nmax * sizeof(float));
-    float *exd = malloc((size_t)nmax * sizeof(float)), *alpha = malloc((size_t)nmax * sizeof(float));
+    float *alpha = malloc((size_t)nmax * sizeof(float));
     float *rgb = malloc(((size_t)nmax * 3 + 1) * sizeof(float));
     shade_bench *B = malloc(sizeof *B);
-    if (!buf || !ex || !exd || !alpha || !rgb || !B) {
+    if (!buf || !ex || !alpha || !rgb || !B) {
         fprintf(stderr, "kernels: out of memory\n");
         return 1;
     }
     for (int i = 0; i < 8 * nmax; i++) ex[i] = expf(-0.05f * (float)(i % 9)); /* also the blocks */
     for (int i = 0; i < nmax; i++) {
         ex[i] = expf(-0.05f * (float)(i % 9));
-        exd[i] = ex[i] * (float)(i % 9 - 4);
         alpha[i] = (i % 3) ? 0.05f : 0.0f;
     }
     for (int i = 0; i < 3 * nmax + 1; i++) rgb[i] = 0.5f;
@@ -298,7 +290,7 @@ int bench_kernels(const bench_opts *o)
         }
         printf("%-16s %-8s", k->kernel, vs_isa_name(k->isa));
         for (int l = 0; l < 2; l++) {
-            double ns = time_kernel(k, lengths[l], buf, ex, exd, alpha, rgb, B, reps);
+            double ns = time_kernel(k, lengths[l], buf, ex, alpha, rgb, B, reps);
             if (k->isa == VS_ISA_SCALAR) scalar_ns[l] = ns;
             double sp = scalar_ns[l] > 0 ? scalar_ns[l] / ns : 0;
             printf("   %8.3f    %5.2fx", ns, sp);
@@ -314,7 +306,6 @@ int bench_kernels(const bench_opts *o)
     if (csv) fclose(csv);
     free(buf);
     free(ex);
-    free(exd);
     free(alpha);
     free(rgb);
     free(B);

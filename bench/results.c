@@ -48,7 +48,7 @@ int bench_results_dir(const bench_opts *o)
     return 0;
 }
 
-void bench_result_path(const bench_opts *o, const char *name, char *buf, size_t cap)
+static void bench_result_path(const bench_opts *o, const char *name, char *buf, size_t cap)
 {
     snprintf(buf, cap, "%s/%s", o->out_dir, name);
 }

@@ -1,7 +1,9 @@
-# Per-ISA compile flags only on the files that need them (simd/*-sse4.c,
-# simd/*-avx2.c, simd/*-avx512.c); everything else stays baseline x86-64.
+# Per-ISA compile flags only on the kernel files that need them, chosen by
+# the file name's suffix (src/kernels/FAMILY-sse4.c, -avx2.c, -avx512.c);
+# everything else, the scalar reference and the dispatch included, stays
+# baseline x86-64.
 function(vsplat_simd_flags)
-  foreach(f ${VSPLAT_SIMD_SOURCES})
+  foreach(f ${VSPLAT_KERNEL_SOURCES})
     if(f MATCHES "-sse4\\.c$")
       set_source_files_properties(${f} PROPERTIES COMPILE_OPTIONS "-msse4.1")
     elseif(f MATCHES "-avx2\\.c$")

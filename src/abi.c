@@ -86,7 +86,6 @@ void vs_stats_export(const vs_stats *full, vs_stats *out, size_t size)
 
 vs_status vs_load_options_import(vs_context *ctx, const vs_load_options *o, vs_load_options *full)
 {
-    vs_load_options_init_sized(full, sizeof *full);
     if (!o) return VS_OK;
     if (!KNOWN(o->struct_size, load_ends, vs_load_options))
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,

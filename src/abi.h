@@ -24,7 +24,9 @@ vs_status vs_settings_import(vs_context *ctx, const vs_settings *s, vs_settings 
  * known layout), struct_size set to it. */
 void vs_stats_export(const vs_stats *full, vs_stats *out, size_t size);
 
-/* Like vs_settings_import; NULL o gives the defaults. */
+/* Like vs_settings_import, but *full must hold the defaults already (the
+ * loader fills it: this file depends on no other of the library's); NULL o
+ * leaves them. */
 vs_status vs_load_options_import(vs_context *ctx, const vs_load_options *o, vs_load_options *full);
 
 #endif

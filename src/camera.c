@@ -1,4 +1,4 @@
-/* Orthographic or perspective camera with the conventions of DESIGN.md §2. */
+/* Orthographic or perspective camera with the conventions of docs/DESIGN.md §2. */
 #include "camera.h"
 #include "context.h"
 #include "volume.h"

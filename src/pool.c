@@ -3,6 +3,7 @@
  * cores the process may use with hwloc_distrib, each set singlified, and each
  * worker binds itself; a binding failure is recorded, never fatal. */
 #include "pool.h"
+#include "context.h" /* struct vs_context, vs_set_error */
 
 #include <hwloc.h>
 #include <pthread.h>
@@ -218,4 +219,17 @@ void vs_pool_run(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg)
     if (failed) p->pin_failed = 1;
     while (p->running > 0) pthread_cond_wait(&p->done_cv, &p->lock);
     pthread_mutex_unlock(&p->lock);
+}
+
+vs_status vs_context_pool(vs_context *ctx, const vs_settings *s)
+{
+    int want = s->threads;
+    if (want <= 0) want = vs_physical_cores();
+    if (ctx->pool && ctx->pool_threads == want && ctx->pool_pin == s->pin) return VS_OK;
+    vs_pool_destroy(ctx->pool);
+    ctx->pool = vs_pool_create(want, s->pin);
+    if (!ctx->pool) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "cannot create the worker pool");
+    ctx->pool_threads = want;
+    ctx->pool_pin = s->pin;
+    return VS_OK;
 }

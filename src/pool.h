@@ -1,8 +1,11 @@
 /* Persistent worker pool: tasks 0..n-1 handed out from an atomic cursor.
  * Workers are placed on cores with hwloc (one per core before SMT siblings);
- * a failed binding is reported, never fatal. */
+ * a failed binding is reported, never fatal.  The library's only threads:
+ * the splatting pipelines and the ray caster run on the context's pool. */
 #ifndef VS_POOL_H
 #define VS_POOL_H
+
+#include "vsplat.h"
 
 typedef void (*vs_task_fn)(void *arg, int worker, int task);
 
@@ -17,5 +20,9 @@ int vs_pool_pin_failed(const struct vs_pool *p);
 void vs_pool_run(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg);
 /* Physical cores available to this process (respects its binding). */
 int vs_physical_cores(void);
+/* The context's pool for s->threads (0: one per physical core) and s->pin,
+ * in ctx->pool: created on first use and again only when those change, so
+ * frames reuse its threads.  Sets the context's error on failure. */
+vs_status vs_context_pool(vs_context *ctx, const vs_settings *s);
 
 #endif

@@ -8,19 +8,20 @@
  *   trilinear - for comparison, with central-difference gradients.
  * Samples lie on a global grid z = k * ray_step (view units: planes parallel
  * to the image, like the splatting sheets), so neighbouring rays sample
- * consistently.  Rows are spread over plain pthreads; each pixel
- * is computed independently, so the image is identical for any thread count. */
+ * consistently.  Rows are tasks on the context's worker pool (src/pool.h),
+ * as the splatting tiles are; each pixel is computed independently, so the
+ * image is identical for any thread count. */
 #include "raycast.h"
-#include "finish.h"
 #include "camera.h"
 #include "classify.h"
 #include "context.h"
+#include "finish.h"
 #include "gaussian.h"
 #include "light.h"
+#include "pool.h"
 #include "timing.h"
 #include "volume.h"
 
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,7 +45,8 @@ typedef struct rc_job {
     int nb[3];
     uint8_t *skip;         /* 1: no point of the brick can have opacity > 0 */
     float *rgba;
-    atomic_int next_row, rows_done, cancel;
+    double *ms;            /* per worker: time spent casting rows           */
+    atomic_int rows_done, cancel;
 } rc_job;
 
 /* ---- voxel access (outside the volume counts as 0) ---- */
@@ -335,31 +337,19 @@ static void render_row(rc_job *J, int y)
     }
 }
 
-typedef struct rc_worker {
-    rc_job *job;
-    int is_caller;   /* reports progress (the thread that called vs_render) */
-    double ms;       /* busy time */
-    pthread_t tid;
-} rc_worker;
-
-static void *worker_main(void *arg)
+/* Pool task: image row y.  Worker 0, the thread that called vs_render,
+ * reports progress; after a cancel the remaining rows return at once. */
+static void row_task(void *arg, int worker, int y)
 {
-    rc_worker *w = arg;
-    rc_job *J = w->job;
+    rc_job *J = arg;
     const vs_settings *s = J->s;
+    if (atomic_load(&J->cancel)) return;
     double t = vs_now_ms();
-    for (;;) {
-        if (atomic_load(&J->cancel)) break;
-        int y = atomic_fetch_add(&J->next_row, 1);
-        if (y >= J->cam.height) break;
-        render_row(J, y);
-        int done = atomic_fetch_add(&J->rows_done, 1) + 1;
-        if (w->is_caller && s->progress &&
-            s->progress(s->progress_user, (double)done / J->cam.height) != 0)
-            atomic_store(&J->cancel, 1);
-    }
-    w->ms = vs_now_ms() - t;
-    return NULL;
+    render_row(J, y);
+    J->ms[worker] += vs_now_ms() - t;
+    int done = atomic_fetch_add(&J->rows_done, 1) + 1;
+    if (worker == 0 && s->progress && s->progress(s->progress_user, (double)done / J->cam.height) != 0)
+        atomic_store(&J->cancel, 1);
 }
 
 /* ---- empty-space skipping ---- */
@@ -410,7 +400,7 @@ static void brick_interval(const rc_job *J, int b, double dil, int n, int *lo, i
 }
 
 /* Shared, read-only state of the brick-grid build; chunks of brick layers
- * [b0, b1) are independent and run on separate threads. */
+ * [b0, b1) are independent pool tasks. */
 typedef struct skip_build {
     rc_job *J;
     double dil, wmin, wmax;
@@ -418,7 +408,6 @@ typedef struct skip_build {
     const uint8_t *zx, *zy, *zz;   /* interval reaches outside the volume */
     int b0, b1;                    /* this chunk */
     int failed;                    /* out of memory in this chunk */
-    pthread_t tid;
 } skip_build;
 
 /* A tighter bound for the Gaussian reconstruction, which the min-max range
@@ -521,9 +510,8 @@ static int gauss_brick_bounds(const skip_build *B, float *hi, float *neg)
 /* Value range of each brick's dependency region by separable min/max passes
  * (x and y per voxel slice into a small ring of slices, then z per brick
  * layer), combined with the kernel bound, then the skip flags. */
-static void *skip_chunk(void *arg)
+static void skip_chunk(skip_build *B)
 {
-    skip_build *B = arg;
     rc_job *J = B->J;
     const struct vs_volume *v = J->vol;
     const int nx = v->dims[0], ny = v->dims[1];
@@ -545,7 +533,7 @@ static void *skip_chunk(void *arg)
     }
     if (B->failed) {
         free(amin); free(amax); free(cmin); free(cmax); free(row); free(kb_hi); free(kb_neg);
-        return NULL;
+        return;
     }
     const vs_classify *c = J->cls;
     const int *ix = B->ix, *iy = B->iy, *iz = B->iz;
@@ -608,11 +596,15 @@ static void *skip_chunk(void *arg)
             }
     }
     free(amin); free(amax); free(cmin); free(cmax); free(row); free(kb_hi); free(kb_neg);
-    return NULL;
 }
 
-static vs_status build_skip(vs_context *ctx, rc_job *J, int nthreads)
+static void skip_task(void *arg, int worker, int chunk) { skip_chunk((skip_build *)arg + chunk); }
+
+/* The brick grid, in as many chunks of brick layers as the pool has
+ * workers (each chunk's scratch is its own). */
+static vs_status build_skip(vs_context *ctx, rc_job *J, struct vs_pool *pool)
 {
+    int nchunks = vs_pool_threads(pool);
     const struct vs_volume *v = J->vol;
     double dil = J->mode == MODE_GAUSS ? J->R : 1.0; /* voxels a point depends on */
     J->org = -ceil(J->R) - 1.0;
@@ -620,8 +612,8 @@ static vs_status build_skip(vs_context *ctx, rc_job *J, int nthreads)
     const int bx = J->nb[0], by = J->nb[1], bz = J->nb[2];
     int *iv = malloc(sizeof(int) * 2 * (size_t)(bx + by + bz));
     uint8_t *zf = malloc((size_t)(bx + by + bz));
-    if (nthreads > bz) nthreads = bz;
-    skip_build *ch = calloc((size_t)nthreads, sizeof *ch);
+    if (nchunks > bz) nchunks = bz;
+    skip_build *ch = calloc((size_t)nchunks, sizeof *ch);
     J->skip = malloc((size_t)bx * by * bz);
     if (!iv || !zf || !ch || !J->skip) {
         free(iv); free(zf); free(ch); free(J->skip);
@@ -638,24 +630,14 @@ static vs_status build_skip(vs_context *ctx, rc_job *J, int nthreads)
         brick_interval(J, b, dil, v->dims[2], &iv[2 * (bx + by + b)], &iv[2 * (bx + by + b) + 1],
                        &zf[bx + by + b]);
     if (J->mode == MODE_GAUSS) gauss_weight_bounds(J, &base.wmin, &base.wmax);
-    /* chunks of brick layers; the caller runs chunk 0 */
-    int started = 1;
-    for (int t = 0; t < nthreads; t++) {
+    for (int t = 0; t < nchunks; t++) {
         ch[t] = base;
-        ch[t].b0 = (int)((long)bz * t / nthreads);
-        ch[t].b1 = (int)((long)bz * (t + 1) / nthreads);
+        ch[t].b0 = (int)((long)bz * t / nchunks);
+        ch[t].b1 = (int)((long)bz * (t + 1) / nchunks);
     }
-    for (int t = 1; t < nthreads; t++) {
-        if (pthread_create(&ch[t].tid, NULL, skip_chunk, &ch[t]) != 0) break;
-        started++;
-    }
-    skip_chunk(&ch[0]);
-    for (int t = started; t < nthreads; t++) skip_chunk(&ch[t]); /* threads we could not start */
-    int failed = ch[0].failed;
-    for (int t = 1; t < nthreads; t++) {
-        if (t < started) pthread_join(ch[t].tid, NULL);
-        failed |= ch[t].failed;
-    }
+    vs_pool_run(pool, nchunks, skip_task, ch);
+    int failed = 0;
+    for (int t = 0; t < nchunks; t++) failed |= ch[t].failed;
     free(iv); free(zf); free(ch);
     if (failed) {
         free(J->skip);
@@ -723,56 +705,36 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         J->box_lo[a] = -ext;
         J->box_hi[a] = vol->dims[a] - 1 + ext;
     }
-    int nthreads = s->threads == 0 ? 2 : s->threads;
-    if (nthreads > 256) nthreads = 256;
-    if (nthreads > J->cam.height) nthreads = J->cam.height;
+    rc = vs_context_pool(ctx, s);
     double t_setup = vs_now_ms();
-    if (J->mode != MODE_ANALYTIC) {
-        rc = build_skip(ctx, J, nthreads);
-        if (rc != VS_OK) {
-            free(cls);
-            free(J);
-            return rc;
-        }
+    if (rc == VS_OK && J->mode != MODE_ANALYTIC) rc = build_skip(ctx, J, ctx->pool);
+    if (rc != VS_OK) {
+        free(cls);
+        free(J);
+        return rc;
     }
     double ms_setup = vs_now_ms() - t_setup;
+    const int nthreads = vs_pool_threads(ctx->pool);
     size_t npix = (size_t)J->cam.width * J->cam.height;
     J->rgba = malloc(npix * 4 * sizeof(float));
-    if (!J->rgba) {
+    J->ms = calloc((size_t)nthreads, sizeof *J->ms);
+    if (!J->rgba || !J->ms) {
         vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: cannot allocate a %dx%d image", J->cam.width,
                      J->cam.height);
+        free(J->rgba);
+        free(J->ms);
         free(J->skip);
         free(cls);
         free(J);
         return VS_ERR_OUT_OF_MEMORY;
     }
-    atomic_init(&J->next_row, 0);
     atomic_init(&J->rows_done, 0);
     atomic_init(&J->cancel, 0);
 
-    rc_worker *w = calloc((size_t)nthreads, sizeof *w);
-    if (!w) {
-        free(J->rgba);
-        free(J->skip);
-        free(cls);
-        free(J);
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "raycast: out of memory");
-    }
-    int started = 1;
-    for (int i = 1; i < nthreads; i++) {
-        w[i].job = J;
-        if (pthread_create(&w[i].tid, NULL, worker_main, &w[i]) != 0) break; /* run with fewer */
-        started++;
-    }
-    w[0].job = J;
-    w[0].is_caller = 1;
-    worker_main(&w[0]);
-    double ms_threads = w[0].ms;
-    for (int i = 1; i < started; i++) {
-        pthread_join(w[i].tid, NULL);
-        ms_threads += w[i].ms;
-    }
-    free(w);
+    vs_pool_run(ctx->pool, J->cam.height, row_task, J);
+    double ms_threads = 0.0;
+    for (int i = 0; i < nthreads; i++) ms_threads += J->ms[i];
+    free(J->ms);
     int cancelled = atomic_load(&J->cancel);
     free(J->skip);
     if (cancelled) {
@@ -791,7 +753,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         memset(st, 0, sizeof *st);
         st->pipeline = "raycast";
         st->isa = "scalar";
-        st->threads = started;
+        st->threads = nthreads;
         st->width = out->width;
         st->height = out->height;
         st->voxels_total = (uint64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
@@ -800,6 +762,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         st->iso_lo = cls->lo;
         st->iso_hi = cls->hi;
         st->ramp = cls->ramp;
+        st->pin_warning = vs_pool_pin_failed(ctx->pool);
         st->ms_total = vs_now_ms() - t_start;
     }
     free(cls);

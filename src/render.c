@@ -105,19 +105,6 @@ static int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static vs_status ensure_pool(vs_context *ctx, const vs_settings *s)
-{
-    int want = s->threads;
-    if (want <= 0) want = vs_physical_cores();
-    if (ctx->pool && ctx->pool_threads == want && ctx->pool_pin == s->pin) return VS_OK;
-    vs_pool_destroy(ctx->pool);
-    ctx->pool = vs_pool_create(want, s->pin);
-    if (!ctx->pool) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "cannot create the worker pool");
-    ctx->pool_threads = want;
-    ctx->pool_pin = s->pin;
-    return VS_OK;
-}
-
 static vs_status check_settings(vs_context *ctx, const vs_settings *s)
 {
     if ((int)s->pipeline < 0 || (int)s->pipeline > VS_PIPELINE_RAYCAST)
@@ -340,7 +327,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
     F.clip_to_volume = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
     int rebuilt = 0;
-    if ((rc = ensure_pool(ctx, s)) != VS_OK) goto fail;
+    if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
     double t_rel = vs_now_ms();
     if ((rc = vs_relevant_get(ctx, ctx->pool, vol, F.cls, seam, &F.rel, &rebuilt)) != VS_OK) goto fail;
     const double t_rel_end = vs_now_ms();

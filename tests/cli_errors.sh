@@ -3,25 +3,10 @@
 # Usage: bash tests/cli_errors.sh PATH_TO_VSPLAT
 set -euo pipefail
 
-VSPLAT=${1:?usage: cli_errors.sh PATH_TO_VSPLAT}
-VSPLAT=$(cd "$(dirname "$VSPLAT")" && pwd)/$(basename "$VSPLAT")
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+source "$(dirname "${BASH_SOURCE[0]}")/testutil.sh"
+tu_setup "${1:?usage: cli_errors.sh PATH_TO_VSPLAT}"
 mkdir "$T/work"
-cd "$T/work"  # outputs here; logs in $T
-
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*" >&2; }
-
-# run ARGS...: runs vsplat; sets rc, stdout in $T/out, stderr in $T/err
-run() {
-    set +e
-    "$VSPLAT" "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-    set -e
-}
+cd "$T/work" # outputs here; logs in $T
 
 # expect_fail CODE DESC ARGS...: exit code CODE, exactly one "vsplat: " line on stderr
 expect_fail() {
@@ -37,21 +22,16 @@ expect_fail() {
     fi
 }
 
-# expect_msg REGEX DESC: the last run's stderr matches REGEX
-expect_msg() {
-    if grep -Eq -- "$1" "$T/err"; then ok; else bad "$2: stderr lacks /$1/: $(head -c 300 "$T/err")"; fi
-}
-
 SCENE=(--scene sphere:24 --size 64x64 --pipeline raycast -q)
 
 # usage
 expect_fail 1 "no arguments"
 expect_fail 1 "unknown command" frobnicate
-expect_msg "frobnicate" "unknown command named"
+expect_err "frobnicate" "unknown command named"
 expect_fail 1 "unknown option" render "${SCENE[@]}" --frobnicate -o a.png
-expect_msg "--frobnicate" "unknown option named"
+expect_err "--frobnicate" "unknown option named"
 expect_fail 1 "missing value" render "${SCENE[@]}" -o a.png --zoom
-expect_msg "--zoom" "missing value names the option"
+expect_err "--zoom" "missing value names the option"
 expect_fail 1 "no output" render "${SCENE[@]}"
 expect_fail 1 "no input" render --size 64x64 -o a.png
 expect_fail 1 "two inputs" render a.nii b.nii -o a.png
@@ -59,12 +39,12 @@ expect_fail 1 "file and scene" render a.nii "${SCENE[@]}" -o a.png
 
 # input files
 expect_fail 1 "missing input file" render "$T/no-such-volume.nii" -o a.png
-expect_msg "no-such-volume.nii" "missing input names the file"
+expect_err "no-such-volume.nii" "missing input names the file"
 expect_fail 1 "info on a missing file" info "$T/no-such-volume.nii"
-expect_msg "no-such-volume.nii" "info on a missing file names the file"
+expect_err "no-such-volume.nii" "info on a missing file names the file"
 printf '\x01\x02\x03' >short.raw
 expect_fail 1 "truncated raw" render short.raw --dims 4,4,4 --type u8 -o a.png
-expect_msg "short.raw" "truncated raw names the file"
+expect_err "short.raw" "truncated raw names the file"
 expect_fail 1 "--dims without --type" info short.raw --dims 4,4,4
 expect_fail 1 "bad --type" info short.raw --dims 1,1,3 --type u12
 expect_fail 1 "bad --dims" info short.raw --dims 1,0,3 --type u8
@@ -74,11 +54,11 @@ expect_fail 1 "bad --endian" info short.raw --dims 1,1,3 --type u8 --endian midd
 for v in abc 0x10 64x 64x0 99999x64 64x64x2 -64x64 64.5x64 "" ; do
     expect_fail 1 "bad --size '$v'" render "${SCENE[@]}" --size "$v" -o a.png
 done
-expect_msg "--size" "bad --size names the option"
+expect_err "--size" "bad --size names the option"
 expect_fail 1 "bad --pipeline" render "${SCENE[@]}" --pipeline fancy -o a.png
-expect_msg "--pipeline" "bad --pipeline names the option"
+expect_err "--pipeline" "bad --pipeline names the option"
 expect_fail 1 "--iso 5:3" render "${SCENE[@]}" --iso 5:3 -o a.png
-expect_msg "--iso" "empty iso-range names the option"
+expect_err "--iso" "empty iso-range names the option"
 expect_fail 1 "--iso abc" render "${SCENE[@]}" --iso abc -o a.png
 expect_fail 1 "--iso nan" render "${SCENE[@]}" --iso nan -o a.png
 expect_fail 1 "--zoom abc" render "${SCENE[@]}" --zoom abc -o a.png
@@ -101,17 +81,17 @@ expect_fail 1 "--slab 0" render "${SCENE[@]}" --slab 0 -o a.png
 expect_fail 1 "--bits 12" render "${SCENE[@]}" --bits 12 -o a.png
 expect_fail 1 "--no-pin=1" render "${SCENE[@]}" --no-pin=1 -o a.png
 expect_fail 1 "--tf" render "${SCENE[@]}" --tf tf.txt -o a.png
-expect_msg "tf.txt: cannot open" "--tf on a missing file names it"
+expect_err "tf.txt: cannot open" "--tf on a missing file names it"
 VSPLAT_THREADS=lots expect_fail 1 "bad VSPLAT_THREADS" render "${SCENE[@]}" -o a.png
-expect_msg "VSPLAT_THREADS" "bad VSPLAT_THREADS names the variable"
+expect_err "VSPLAT_THREADS" "bad VSPLAT_THREADS names the variable"
 VSPLAT_ISA=mmx expect_fail 1 "bad VSPLAT_ISA" render "${SCENE[@]}" -o a.png
 
 # outputs
 expect_fail 1 "unknown output extension" render "${SCENE[@]}" -o a.bmp
-expect_msg "a.bmp" "unknown extension names the file"
+expect_err "a.bmp" "unknown extension names the file"
 expect_fail 1 "no output extension" render "${SCENE[@]}" -o a
 expect_fail 1 "unwritable output" render "${SCENE[@]}" -o /nonexistent/x.png
-expect_msg "/nonexistent/x.png" "unwritable output names the file"
+expect_err "/nonexistent/x.png" "unwritable output names the file"
 if [[ -e /nonexistent/x.png ]]; then bad "unwritable output left a file"; else ok; fi
 expect_fail 1 "unwritable stats" render "${SCENE[@]}" --stats /nonexistent/s.json -o b.png
 if [[ -e b.png ]]; then bad "failed render (stats) left b.png"; else ok; fi
@@ -123,7 +103,7 @@ run render --scene sphere:24 --size 32x48 --pipeline raycast -q -o other.png
 if [[ $rc -eq 0 ]]; then ok; else bad "render other.png: exit $rc: $(cat "$T/err")"; fi
 expect_fail 1 "compare different sizes" compare small.png other.png
 expect_fail 1 "compare missing image" compare small.png missing.png
-expect_msg "missing.png" "compare names the missing image"
+expect_err "missing.png" "compare names the missing image"
 echo "not an image" >junk.png
 expect_fail 1 "compare junk image" compare small.png junk.png
 expect_fail 1 "compare one argument" compare small.png
@@ -137,5 +117,4 @@ done
 shopt -u nullglob dotglob
 if [[ -z $left ]]; then ok; else bad "files left behind: $left"; fi
 
-echo "$passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+tu_done

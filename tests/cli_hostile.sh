@@ -11,18 +11,11 @@
 # Usage: bash tests/cli_hostile.sh PATH_TO_VSPLAT
 set -euo pipefail
 
-VSPLAT=${1:?usage: cli_hostile.sh PATH_TO_VSPLAT}
-VSPLAT=$(cd "$(dirname "$VSPLAT")" && pwd)/$(basename "$VSPLAT")
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+source "$(dirname "${BASH_SOURCE[0]}")/testutil.sh"
+tu_setup "${1:?usage: cli_hostile.sh PATH_TO_VSPLAT}"
 mkdir "$T/in" "$T/work"
 cd "$T/work"
 IN=$T/in
-
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*" >&2; }
 
 LIMIT=""
 if [[ ${VSPLAT_SANITIZED:-0} != 1 ]]; then LIMIT="ulimit -v 2097152;"; fi
@@ -219,5 +212,4 @@ left=(*)
 shopt -u nullglob dotglob
 if [[ ${#left[@]} -eq 0 ]]; then ok; else bad "files left behind: ${left[*]}"; fi
 
-echo "$passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+tu_done

@@ -29,10 +29,7 @@ T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 P=$T/prefix
 
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*" >&2; }
+source "$(dirname "${BASH_SOURCE[0]}")/testutil.sh"
 step() { # desc, command...
     local desc=$1
     shift
@@ -45,7 +42,7 @@ check_run() { # desc, exe, args...
     if "$@" >"$T/run" 2>&1 && grep -Eq "$LINE" "$T/run"; then ok; else bad "$desc: $(head -c 600 "$T/run")"; fi
 }
 
-step "cmake --install" cmake --install "$BUILD" --prefix "$P" || { echo "$passed passed, $failed failed"; exit 1; }
+step "cmake --install" cmake --install "$BUILD" --prefix "$P" || { tu_done; exit 1; }
 LIBDIR=$(ls -d "$P"/lib*/libvsplat.so 2>/dev/null | head -1 | xargs -r dirname)
 if [[ -n $LIBDIR ]]; then ok; else bad "no libvsplat.so under $P/lib*"; LIBDIR=$P/lib; fi
 for f in "$P/include/vsplat.h" "$P/bin/vsplat" "$LIBDIR/libvsplat.a" "$LIBDIR/pkgconfig/vsplat.pc" \
@@ -143,5 +140,4 @@ if step "pkg-config static build" gcc -std=c11 -Wall -Wextra -Werror "$EX" $(pkg
     if grep -q libvsplat "$T/ldd"; then bad "pc_static links libvsplat dynamically"; else ok; fi
 fi
 
-echo "$passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+tu_done

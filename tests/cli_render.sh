@@ -3,33 +3,10 @@
 # Usage: bash tests/cli_render.sh PATH_TO_VSPLAT
 set -euo pipefail
 
-VSPLAT=${1:?usage: cli_render.sh PATH_TO_VSPLAT}
-VSPLAT=$(cd "$(dirname "$VSPLAT")" && pwd)/$(basename "$VSPLAT")
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+source "$(dirname "${BASH_SOURCE[0]}")/testutil.sh"
+tu_setup "${1:?usage: cli_render.sh PATH_TO_VSPLAT}"
 mkdir "$T/work"
 cd "$T/work" # outputs here; logs in $T
-
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*" >&2; }
-
-run() {
-    set +e
-    "$VSPLAT" "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-    set -e
-}
-expect_ok() {
-    local desc=$1
-    shift
-    run "$@"
-    if [[ $rc -eq 0 ]]; then ok; else bad "$desc: exit $rc; stderr: $(head -c 400 "$T/err")"; fi
-}
-expect_file() { if [[ -s $1 ]]; then ok; else bad "$2: $1 was not written"; fi; }
-expect_out() { if grep -Eq -- "$1" "$T/out"; then ok; else bad "$2: stdout lacks /$1/: $(head -c 400 "$T/out")"; fi; }
-expect_err() { if grep -Eq -- "$1" "$T/err"; then ok; else bad "$2: stderr lacks /$1/: $(head -c 400 "$T/err")"; fi; }
 
 SCENE=(--scene sphere:24 --size 64x64 --pipeline raycast)
 
@@ -150,5 +127,4 @@ expect_out '^range: 1 258$' "info big-endian range"
 expect_ok "render raw" render v.raw --dims 4,3,2 --type u8 --iso 50 --size 32x32 --pipeline raycast -q -o raw.png
 expect_file raw.png "render raw"
 
-echo "$passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+tu_done

@@ -4,40 +4,21 @@
 # Usage: bash tests/cli_tf.sh PATH_TO_VSPLAT   (VSPLAT_SOURCE_DIR: the source tree)
 set -euo pipefail
 
-VSPLAT=${1:?usage: cli_tf.sh PATH_TO_VSPLAT}
-VSPLAT=$(cd "$(dirname "$VSPLAT")" && pwd)/$(basename "$VSPLAT")
+source "$(dirname "${BASH_SOURCE[0]}")/testutil.sh"
+tu_setup "${1:?usage: cli_tf.sh PATH_TO_VSPLAT}"
 SRC=${VSPLAT_SOURCE_DIR:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)}
 TF=$SRC/tools/tf
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
 mkdir "$T/work"
 cd "$T/work"
 
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $*" >&2; }
-run() {
-    set +e
-    "$VSPLAT" "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-    set -e
-}
-expect_ok() {
-    local desc=$1
-    shift
-    run "$@"
-    if [[ $rc -eq 0 ]]; then ok; else bad "$desc: exit $rc; stderr: $(head -c 400 "$T/err")"; fi
-}
 expect_fail() { # desc, stderr regex, args...
     local desc=$1 re=$2
     shift 2
     run "$@"
     if [[ $rc -eq 1 ]]; then ok; else bad "$desc: exit $rc (expected 1)"; fi
-    if grep -Eq -- "$re" "$T/err"; then ok; else bad "$desc: stderr lacks /$re/: $(head -c 400 "$T/err")"; fi
+    expect_err "$re" "$desc"
     if [[ $(wc -l <"$T/err") -eq 1 ]]; then ok; else bad "$desc: more than one line on stderr"; fi
 }
-expect_file() { if [[ -s $1 ]]; then ok; else bad "$2: $1 was not written"; fi; }
 not_blank() { # image, desc: differs from a transparent image of the same size
     run compare "$1" "$2"
     local max
@@ -156,5 +137,4 @@ for opt in --tf --turntable --fps; do
     if grep -q -- "$opt\b" "$T/out"; then ok; else bad "render --help does not list $opt"; fi
 done
 
-echo "$passed passed, $failed failed"
-[[ $failed -eq 0 ]]
+tu_done

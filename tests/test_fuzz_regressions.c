@@ -15,26 +15,6 @@ static vs_context *ctx;
 static vs_volume *tf_vol;
 static char tmp[1024];
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
-static unsigned char *read_all(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc((size_t)len + 1);
-    *n = fread(b, 1, (size_t)len, f);
-    fclose(f);
-    return b;
-}
-
 /* Returns 1 if the input loaded. */
 static int run_one(const char *target, const unsigned char *d, size_t n, const char *what)
 {
@@ -73,7 +53,7 @@ static int run_one(const char *target, const unsigned char *d, size_t n, const c
         return 0;
     }
     fclose(f);
-    double t0 = now_s();
+    double t0 = tu_now_s();
     int ok = 0;
     if (!strcmp(target, "tf")) {
         vs_tf_point *pts = NULL;
@@ -115,7 +95,7 @@ static int run_one(const char *target, const unsigned char *d, size_t n, const c
             CHECK(v == NULL && *vs_last_error(ctx), "%s: failed without a message or left a volume", what);
         }
     }
-    CHECK(now_s() - t0 < 5.0, "%s: took %.1f s", what, now_s() - t0);
+    CHECK(tu_now_s() - t0 < 5.0, "%s: took %.1f s", what, tu_now_s() - t0);
     unlink(path);
     return ok;
 }
@@ -134,7 +114,7 @@ static void run_dir(const char *kind, const char *target, int must_load)
         char p[2400];
         snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
         size_t n;
-        unsigned char *b = read_all(p, &n);
+        unsigned char *b = tu_read_file(p, &n);
         if (!b) continue;
         char what[300];
         snprintf(what, sizeof what, "%s/%s/%s", kind, target, e->d_name);
@@ -152,8 +132,7 @@ int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 2;
     if (vs_volume_scene(ctx, "sphere:8", &tf_vol) != VS_OK) return 2;
-    snprintf(tmp, sizeof tmp, "%s/vsplat_fuzzreg_XXXXXX", tu_tmpdir());
-    if (!mkdtemp(tmp)) return 2;
+    if (!tu_make_tmpdir(tmp, sizeof tmp, "fuzzreg")) return 2;
     static const char *const targets[] = {"nifti", "nrrd", "den", "raw", "stack", "tar", "tf"};
     for (int i = 0; i < 7; i++) {
         run_dir("seeds", targets[i], 1);

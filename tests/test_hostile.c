@@ -29,39 +29,7 @@
 static vs_context *ctx;
 static char tmp[1024];
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 static void path_of(char *buf, size_t cap, const char *name) { snprintf(buf, cap, "%s/%s", tmp, name); }
-
-static void write_bytes(const char *path, const void *data, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f) {
-        fprintf(stderr, "cannot create %s\n", path);
-        exit(1);
-    }
-    if (n && fwrite(data, 1, n, f) != n) exit(1);
-    fclose(f);
-}
-
-static unsigned char *read_bytes(const char *path, size_t *n)
-{
-    *n = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc((size_t)len + 1);
-    *n = fread(b, 1, (size_t)len, f);
-    fclose(f);
-    return b;
-}
 
 static int image_finite(const vs_image *img)
 {
@@ -213,7 +181,7 @@ static void test_volume_api(void)
     char path[1100];
     path_of(path, sizeof path, "opts.raw");
     unsigned char bytes[64] = {0};
-    write_bytes(path, bytes, sizeof bytes);
+    tu_write_file(path, bytes, sizeof bytes);
     vs_load_options o;
     struct {
         int dims[3];
@@ -256,11 +224,8 @@ static int cancel_now(void *user, double f)
 
 static void test_render_api(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "sphere:16", &v) != VS_OK) {
-        CHECK(0, "sphere:16: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "sphere:16");
+    if (!v) return;
     vs_settings s;
     vs_settings_init(&s);
     s.width = s.height = 24;
@@ -587,7 +552,7 @@ static void test_nonfinite(void)
 /* The shading table with gradients that have no direction: NaN or infinite
  * components (float densities that overflowed) and magnitudes under 1e-30
  * must shade like a zero gradient (facing the eye), exactly as the exact
- * path (vs_light_eval) does.  Before the guard in normals.h, lrintf(NaN)
+ * path (vs_light_eval) does.  Before the guard in shade_lut.h, lrintf(NaN)
  * gave INT_MIN and the look-up read far outside the tables (a crash on
  * +-FLT_MAX volumes, tests/test_stiff.c), and gradients between 3.7e-37 and
  * 1e-30 got a direction the exact path does not give them. */
@@ -632,23 +597,6 @@ static void test_shade_lut_nonfinite(void)
 
 /* ------------------------------------------------------------ loaders */
 
-static void expect_fail(const char *path, const vs_load_options *o, const char *why)
-{
-    const char *base = strrchr(path, '/');
-    base = base ? base + 1 : path;
-    vs_volume *v = (vs_volume *)1;
-    double t0 = now_s();
-    vs_status st = vs_volume_load(ctx, path, o, &v);
-    double dt = now_s() - t0;
-    const char *msg = vs_last_error(ctx);
-    CHECK(st != VS_OK, "%s (%s): loaded although it should fail", base, why);
-    CHECK(v == NULL, "%s (%s): out not cleared", base, why);
-    CHECK(msg && strstr(msg, base), "%s (%s): message '%s' does not name the file", base, why, msg);
-    CHECK(dt < 5.0, "%s (%s): took %.1f s", base, why, dt);
-    if (st == VS_OK) vs_volume_release(v);
-    printf("  %-34s -> %s: %s\n", why, vs_status_string(st), msg);
-}
-
 static vs_volume *expect_load(const char *path, const char *why)
 {
     vs_volume *v = NULL;
@@ -685,7 +633,7 @@ static void write_nifti(const char *name, int ndim, const int16_t dim[7], int16_
     unsigned char *all = calloc(1, 352 + n);
     nifti_header(all, ndim, dim, dt, bitpix, pd, off, slope);
     if (n) memcpy(all + 352, data, n);
-    write_bytes(path, all, 352 + n);
+    tu_write_file(path, all, 352 + n);
     free(all);
 }
 
@@ -713,33 +661,33 @@ static void test_nifti_hostile(void)
             CHECK(!v || s[0] == 2.0, "negative pixdim: spacing %g", s[0]);
             vs_volume_release(v);
         } else {
-            expect_fail(path, NULL, sp[i].name);
+            tu_expect_load_fail(ctx, path, NULL, sp[i].name);
         }
     }
     /* sizes whose byte count overflows 32 bits, negative and zero dims */
     const int16_t big[7] = {32767, 32767, 32767, 1, 1, 1, 1};
     write_nifti("dims_32767cubed.nii", 3, big, 16, 32, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "dims_32767cubed.nii");
-    expect_fail(path, NULL, "nifti 32767^3 f32 (overflows)");
+    tu_expect_load_fail(ctx, path, NULL, "nifti 32767^3 f32 (overflows)");
     const int16_t ovf[7] = {16384, 16384, 16384, 1, 1, 1, 1};
     write_nifti("dims_16384cubed.nii", 3, ovf, 64, 64, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "dims_16384cubed.nii");
-    expect_fail(path, NULL, "nifti 16384^3 f64 (2^45 bytes)");
+    tu_expect_load_fail(ctx, path, NULL, "nifti 16384^3 f64 (2^45 bytes)");
     const int16_t negd[7] = {4, -4, 4, 1, 1, 1, 1};
     write_nifti("dims_negative.nii", 3, negd, 16, 32, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "dims_negative.nii");
-    expect_fail(path, NULL, "nifti negative dim[2]");
+    tu_expect_load_fail(ctx, path, NULL, "nifti negative dim[2]");
     const int16_t zero4[7] = {4, 4, 4, 0, 1, 1, 1};
     write_nifti("dims_zero_t.nii", 4, zero4, 16, 32, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "dims_zero_t.nii");
-    expect_fail(path, NULL, "nifti 4-D with dim[4] = 0");
+    tu_expect_load_fail(ctx, path, NULL, "nifti 4-D with dim[4] = 0");
     /* vox_offset past the end, and absurd */
     write_nifti("offset_past_end.nii", 3, d444, 16, 32, unit, 100000, 0, data, sizeof data);
     path_of(path, sizeof path, "offset_past_end.nii");
-    expect_fail(path, NULL, "nifti vox_offset past the end");
+    tu_expect_load_fail(ctx, path, NULL, "nifti vox_offset past the end");
     write_nifti("offset_huge.nii", 3, d444, 16, 32, unit, 3e38f, 0, data, sizeof data);
     path_of(path, sizeof path, "offset_huge.nii");
-    expect_fail(path, NULL, "nifti vox_offset 3e38");
+    tu_expect_load_fail(ctx, path, NULL, "nifti vox_offset 3e38");
     write_nifti("offset_nan.nii", 3, d444, 16, 32, unit, NAN, 0, data, sizeof data);
     path_of(path, sizeof path, "offset_nan.nii");
     vs_volume *v = NULL;
@@ -749,16 +697,16 @@ static void test_nifti_hostile(void)
     /* unsupported / inconsistent datatypes */
     write_nifti("complex.nii", 3, d444, 32, 64, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "complex.nii");
-    expect_fail(path, NULL, "nifti complex64");
+    tu_expect_load_fail(ctx, path, NULL, "nifti complex64");
     write_nifti("rgb.nii", 3, d444, 128, 24, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "rgb.nii");
-    expect_fail(path, NULL, "nifti RGB24");
+    tu_expect_load_fail(ctx, path, NULL, "nifti RGB24");
     write_nifti("datatype_bogus.nii", 3, d444, 12345, 8, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "datatype_bogus.nii");
-    expect_fail(path, NULL, "nifti datatype 12345");
+    tu_expect_load_fail(ctx, path, NULL, "nifti datatype 12345");
     write_nifti("data_truncated.nii", 3, d444, 16, 32, unit, 352, 0, data, sizeof data - 5);
     path_of(path, sizeof path, "data_truncated.nii");
-    expect_fail(path, NULL, "nifti data 5 bytes short");
+    tu_expect_load_fail(ctx, path, NULL, "nifti data 5 bytes short");
     /* scl_slope that overflows f32: accepted, the Inf voxels follow the
      * non-finite policy (range from the finite ones) */
     int16_t i16[64];
@@ -787,12 +735,12 @@ static void test_nifti_hostile(void)
     write_nifti("valid.nii", 3, d444, 16, 32, unit, 352, 0, data, sizeof data);
     path_of(path, sizeof path, "valid.nii");
     size_t n;
-    unsigned char *b = read_bytes(path, &n);
+    unsigned char *b = tu_read_file(path, &n);
     int loaded = 0;
-    double t0 = now_s();
+    double t0 = tu_now_s();
     for (size_t cut = 0; cut < n; cut += 7) {
         path_of(path, sizeof path, "cut.nii");
-        write_bytes(path, b, cut);
+        tu_write_file(path, b, cut);
         v = (vs_volume *)1;
         st = vs_volume_load(ctx, path, NULL, &v);
         loaded += st == VS_OK;
@@ -800,7 +748,7 @@ static void test_nifti_hostile(void)
               vs_last_error(ctx));
         if (st == VS_OK) vs_volume_release(v);
     }
-    printf("  %-34s -> %d of them loaded, %.2f s\n", "nifti cut every 7 bytes", loaded, now_s() - t0);
+    printf("  %-34s -> %d of them loaded, %.2f s\n", "nifti cut every 7 bytes", loaded, tu_now_s() - t0);
     free(b);
 }
 
@@ -835,9 +783,9 @@ static void test_nrrd_hostile(void)
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         path_of(path, sizeof path, cases[i].name);
-        write_bytes(path, cases[i].text, strlen(cases[i].text));
+        tu_write_file(path, cases[i].text, strlen(cases[i].text));
         if (cases[i].ok == 0) {
-            expect_fail(path, NULL, cases[i].name);
+            tu_expect_load_fail(ctx, path, NULL, cases[i].name);
         } else {
             /* spacing: rejected, or accepted with a finite positive spacing
              * (Teem ignores unusable spacings: then 1) */
@@ -877,12 +825,12 @@ static void test_images_hostile(void)
     path_of(path, sizeof path, "valid.png");
     CHECK(io->write_pages(path, W, H, 1, 1, VS_PIX_U8, px, 0, 0, NULL, err, sizeof err) == VS_OK, "png: %s", err);
     size_t n;
-    unsigned char *png = read_bytes(path, &n);
+    unsigned char *png = tu_read_file(path, &n);
     path_of(path, sizeof path, "valid.tif");
     CHECK(io->write_pages(path, W, H, 1, 3, VS_PIX_U8, px, 2.0, 2.0, NULL, err, sizeof err) == VS_OK, "tif: %s",
           err);
     size_t nt;
-    unsigned char *tif = read_bytes(path, &nt);
+    unsigned char *tif = tu_read_file(path, &nt);
     if (!png || !tif) {
         CHECK(0, "could not write the valid images");
         free(png);
@@ -891,10 +839,10 @@ static void test_images_hostile(void)
     }
     /* every truncation: rejected (or, for a TIFF cut after whole pages,
      * possibly fewer pages), never a crash */
-    double t0 = now_s();
+    double t0 = tu_now_s();
     for (size_t cut = 0; cut < n; cut += 3) {
         path_of(path, sizeof path, "cut.png");
-        write_bytes(path, png, cut);
+        tu_write_file(path, png, cut);
         vs_volume *v = (vs_volume *)1;
         vs_status st = vs_volume_load(ctx, path, NULL, &v);
         if (st == VS_OK) {
@@ -907,12 +855,12 @@ static void test_images_hostile(void)
                   vs_last_error(ctx));
         }
     }
-    printf("  %-34s -> rejected (a cut IEND loads complete data), %.2f s\n", "png cut every 3 bytes", now_s() - t0);
-    t0 = now_s();
+    printf("  %-34s -> rejected (a cut IEND loads complete data), %.2f s\n", "png cut every 3 bytes", tu_now_s() - t0);
+    t0 = tu_now_s();
     int accepted = 0;
     for (size_t cut = 0; cut < nt; cut += 5) {
         path_of(path, sizeof path, "cut.tif");
-        write_bytes(path, tif, cut);
+        tu_write_file(path, tif, cut);
         vs_volume *v = (vs_volume *)1;
         vs_status st = vs_volume_load(ctx, path, NULL, &v);
         if (st == VS_OK) {
@@ -923,7 +871,7 @@ static void test_images_hostile(void)
         }
     }
     printf("  %-34s -> %d of %zu cuts load (whole pages), the rest rejected, %.2f s\n", "tif cut every 5 bytes",
-           accepted, (nt + 4) / 5, now_s() - t0);
+           accepted, (nt + 4) / 5, tu_now_s() - t0);
     /* a PNG whose IHDR claims 2^31-1 x 2^31-1 (CRC fixed up, so only the
      * size is wrong); and 100000 x 100000 */
     const uint32_t sizes[][2] = {{0x7fffffffu, 0x7fffffffu}, {100000, 100000}, {0, 5}};
@@ -939,8 +887,8 @@ static void test_images_hostile(void)
         char name[64];
         snprintf(name, sizeof name, "ihdr_%ux%u.png", sizes[k][0], sizes[k][1]);
         path_of(path, sizeof path, name);
-        write_bytes(path, c, n);
-        expect_fail(path, NULL, name);
+        tu_write_file(path, c, n);
+        tu_expect_load_fail(ctx, path, NULL, name);
         free(c);
     }
     /* garbage after a valid PNG signature; a TIFF header pointing nowhere */
@@ -948,12 +896,12 @@ static void test_images_hostile(void)
     memcpy(junk, png, 8);
     for (int i = 8; i < 200; i++) junk[i] = (unsigned char)(i * 31);
     path_of(path, sizeof path, "signature_then_junk.png");
-    write_bytes(path, junk, sizeof junk);
-    expect_fail(path, NULL, "png signature then junk");
+    tu_write_file(path, junk, sizeof junk);
+    tu_expect_load_fail(ctx, path, NULL, "png signature then junk");
     const unsigned char tiff_bad_ifd[16] = {'I', 'I', 42, 0, 0xf0, 0xff, 0xff, 0x7f, 0, 0, 0, 0, 0, 0, 0, 0};
     path_of(path, sizeof path, "ifd_far.tif");
-    write_bytes(path, tiff_bad_ifd, sizeof tiff_bad_ifd);
-    expect_fail(path, NULL, "tiff IFD offset 2 GB");
+    tu_write_file(path, tiff_bad_ifd, sizeof tiff_bad_ifd);
+    tu_expect_load_fail(ctx, path, NULL, "tiff IFD offset 2 GB");
     free(png);
     free(tif);
 
@@ -971,20 +919,20 @@ static void test_images_hostile(void)
     for (int i = 0; i < 512; i++) sum += tar[i];
     snprintf((char *)tar + 148, 8, "%06o", sum & 0777777u);
     path_of(path, sizeof path, "member_8gb.tar");
-    write_bytes(path, tar, sizeof tar);
-    expect_fail(path, NULL, "tar member claiming 8 GB");
+    tu_write_file(path, tar, sizeof tar);
+    tu_expect_load_fail(ctx, path, NULL, "tar member claiming 8 GB");
     tar[124] = 0xff; /* base-256 size, negative */
     memset(tar + 148, ' ', 8);
     sum = 0;
     for (int i = 0; i < 512; i++) sum += tar[i];
     snprintf((char *)tar + 148, 8, "%06o", sum & 0777777u);
     path_of(path, sizeof path, "member_base256.tar");
-    write_bytes(path, tar, sizeof tar);
-    expect_fail(path, NULL, "tar base-256 negative size");
+    tu_write_file(path, tar, sizeof tar);
+    tu_expect_load_fail(ctx, path, NULL, "tar base-256 negative size");
     path_of(path, sizeof path, "zeros.tar");
     memset(tar, 0, sizeof tar);
-    write_bytes(path, tar, sizeof tar);
-    expect_fail(path, NULL, "tar of zero blocks");
+    tu_write_file(path, tar, sizeof tar);
+    tu_expect_load_fail(ctx, path, NULL, "tar of zero blocks");
 
     /* .den whose map_length and dims disagree; 65535^3 with map_length 0 */
     unsigned char den[62 + 8];
@@ -995,18 +943,18 @@ static void test_images_hostile(void)
     den[54] = 2;
     den[58] = 9;
     path_of(path, sizeof path, "maplength.den");
-    write_bytes(path, den, sizeof den);
-    expect_fail(path, NULL, "den map_length 9 for 2x2x2");
+    tu_write_file(path, den, sizeof den);
+    tu_expect_load_fail(ctx, path, NULL, "den map_length 9 for 2x2x2");
     den[50] = den[51] = den[52] = den[53] = den[54] = den[55] = 0xff;
     den[58] = 0;
     path_of(path, sizeof path, "max_dims.den");
-    write_bytes(path, den, sizeof den);
-    expect_fail(path, NULL, "den 65535^3");
+    tu_write_file(path, den, sizeof den);
+    tu_expect_load_fail(ctx, path, NULL, "den 65535^3");
     den[50] = den[52] = den[54] = 0;
     den[51] = den[53] = den[55] = 0;
     path_of(path, sizeof path, "zero_dims.den");
-    write_bytes(path, den, sizeof den);
-    expect_fail(path, NULL, "den 0x0x0");
+    tu_write_file(path, den, sizeof den);
+    tu_expect_load_fail(ctx, path, NULL, "den 0x0x0");
 
     /* raw named with dims that overflow, or do not parse */
     unsigned char zeros[64] = {0};
@@ -1014,19 +962,15 @@ static void test_images_hostile(void)
                            "vol_0x4x4_u8.raw", "vol_4x4x4_u12.raw"};
     for (int i = 0; i < 4; i++) {
         path_of(path, sizeof path, names[i]);
-        write_bytes(path, zeros, sizeof zeros);
-        expect_fail(path, NULL, names[i]);
+        tu_write_file(path, zeros, sizeof zeros);
+        tu_expect_load_fail(ctx, path, NULL, names[i]);
     }
 }
 
 int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 2;
-    snprintf(tmp, sizeof tmp, "%s/vsplat_test_hostile_XXXXXX", tu_tmpdir());
-    if (!mkdtemp(tmp)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (!tu_make_tmpdir(tmp, sizeof tmp, "test_hostile")) return 1;
     printf("temporary files in %s\n", tmp);
     test_context_and_names();
     test_volume_api();
@@ -1041,11 +985,7 @@ int main(void)
     test_nrrd_hostile();
     printf("images, tar, den, raw:\n");
     test_images_hostile();
-    if (!tu_failures) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
-        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmp);
-    }
+    tu_remove_tmpdir(tmp);
     vs_context_release(ctx);
     TEST_DONE();
 }

@@ -221,19 +221,11 @@ int main(void)
 {
     vs_context *ctx;
     if (vs_context_create(&ctx) != VS_OK) return 1;
-    snprintf(tmp, sizeof tmp, "%s/vsplat_test_image_XXXXXX", tu_tmpdir());
-    if (!mkdtemp(tmp)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (!tu_make_tmpdir(tmp, sizeof tmp, "test_image")) return 1;
     test_round_trips(ctx);
     test_compare(ctx);
     test_failures(ctx);
-    if (!tu_failures) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
-        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmp);
-    }
+    tu_remove_tmpdir(tmp);
     vs_context_release(ctx);
     TEST_DONE();
 }

@@ -15,41 +15,9 @@
 
 static char tmp[1024];
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 static void path_of(char *buf, size_t cap, const char *name)
 {
     snprintf(buf, cap, "%s/%s", tmp, name);
-}
-
-static void write_bytes(const char *path, const void *data, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f) {
-        fprintf(stderr, "cannot create %s\n", path);
-        exit(1);
-    }
-    if (n && fwrite(data, 1, n, f) != n) exit(1);
-    fclose(f);
-}
-
-static unsigned char *read_bytes(const char *path, size_t *n)
-{
-    *n = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc((size_t)len + 1);
-    *n = fread(b, 1, (size_t)len, f);
-    fclose(f);
-    return b;
 }
 
 static void write_gz(const char *path, const void *data, size_t n)
@@ -87,25 +55,6 @@ static void check_shape(const vs_volume *v, const char *what, int x, int y, int 
           vs_type_name(t));
     CHECK(fabs(s[0] - sx) <= tol && fabs(s[1] - sy) <= tol && fabs(s[2] - sz) <= tol,
           "%s: spacing %g,%g,%g, expected %g,%g,%g", what, s[0], s[1], s[2], sx, sy, sz);
-}
-
-/* Loading must fail with a message that names the file, quickly. */
-static void expect_fail(vs_context *ctx, const char *path, const vs_load_options *o, const char *why)
-{
-    const char *base = strrchr(path, '/');
-    base = base ? base + 1 : path;
-    vs_volume *v = (vs_volume *)1;
-    double t0 = now_s();
-    vs_status st = vs_volume_load(ctx, path, o, &v);
-    double dt = now_s() - t0;
-    const char *msg = vs_last_error(ctx);
-    CHECK(st != VS_OK, "%s (%s): loaded although it should fail", base, why);
-    CHECK(v == NULL, "%s (%s): out not cleared", base, why);
-    CHECK(msg && *msg && strstr(msg, base), "%s (%s): message '%s' does not name the file", base,
-          why, msg);
-    CHECK(dt < 5.0, "%s (%s): took %.1f s", base, why, dt);
-    if (st == VS_OK) vs_volume_release(v);
-    printf("  %-28s -> %s: %s\n", why, vs_status_string(st), msg);
 }
 
 /* ---- the real data ---- */
@@ -157,9 +106,9 @@ static void test_real(vs_context *ctx)
             o.spacing[1] = f->sy;
             o.spacing[2] = f->sz;
         }
-        double t0 = now_s();
+        double t0 = tu_now_s();
         vs_volume *v = load(ctx, path, &o);
-        double dt = now_s() - t0;
+        double dt = tu_now_s() - t0;
         if (!v) continue;
         check_shape(v, f->name, f->x, f->y, f->z, f->type, f->sx, f->sy, f->sz, 1e-4);
         double lo, hi;
@@ -237,13 +186,13 @@ static void write_nifti_ex(const char *path, int big, int pair, int ndim, const 
     if (pair) {
         char p2[1200];
         snprintf(p2, sizeof p2, "%s.img", path);
-        write_bytes(p2, d, nbytes);
+        tu_write_file(p2, d, nbytes);
         snprintf(p2, sizeof p2, "%s.hdr", path);
-        write_bytes(p2, h, hsize);
+        tu_write_file(p2, h, hsize);
     } else if (ends_with_gz(path)) {
         write_gz(path, all, hsize + nbytes);
     } else {
-        write_bytes(path, all, hsize + nbytes);
+        tu_write_file(path, all, hsize + nbytes);
     }
     free(all);
 }
@@ -334,12 +283,12 @@ static void test_nifti(vs_context *ctx)
     path_of(path, sizeof path, "t_pair.img");
     unlink(path);
     path_of(path, sizeof path, "t_pair.hdr");
-    expect_fail(ctx, path, NULL, "nifti pair without .img");
+    tu_expect_load_fail(ctx, path, NULL, "nifti pair without .img");
     /* zero spacing on a real axis is rejected */
     const float zero[3] = {1, 0, 1};
     path_of(path, sizeof path, "zero_pixdim.nii");
     write_nifti(path, 3, dims, DT_U8, 8, zero, 0.0f, 0.0f, u8, sizeof u8);
-    expect_fail(ctx, path, NULL, "nifti zero pixdim");
+    tu_expect_load_fail(ctx, path, NULL, "nifti zero pixdim");
 }
 
 static void test_nrrd(vs_context *ctx)
@@ -406,7 +355,7 @@ static void test_raw_den(vs_context *ctx)
     const char *names[] = {"t_be.raw", "t_be.raw.gz"};
     for (int k = 0; k < 2; k++) {
         path_of(path, sizeof path, names[k]);
-        if (k == 0) write_bytes(path, be, sizeof be);
+        if (k == 0) tu_write_file(path, be, sizeof be);
         else write_gz(path, be, sizeof be);
         vs_volume *v = load(ctx, path, &o);
         check_shape(v, names[k], NX, NY, NZ, VS_U16, 1, 1, 1, 0);
@@ -421,7 +370,7 @@ static void test_raw_den(vs_context *ctx)
     float f[N];
     for (int i = 0; i < N; i++) f[i] = (float)i * 0.125f - 1.0f;
     path_of(path, sizeof path, "named_7x5x3_f32le.raw");
-    write_bytes(path, f, sizeof f);
+    tu_write_file(path, f, sizeof f);
     vs_volume *v = load(ctx, path, NULL);
     check_shape(v, "named f32 raw", NX, NY, NZ, VS_F32, 1, 1, 1, 0);
     if (v) CHECK(memcmp(vs_volume_data(v), f, sizeof f) == 0, "named f32 raw: data differ");
@@ -438,7 +387,7 @@ static void test_raw_den(vs_context *ctx)
     den[59] = N >> 8;
     for (int i = 0; i < N; i++) den[62 + i] = (unsigned char)(i * 7);
     path_of(path, sizeof path, "t.den");
-    write_bytes(path, den, sizeof den);
+    tu_write_file(path, den, sizeof den);
     v = load(ctx, path, NULL);
     check_shape(v, "den", NX, NY, NZ, VS_U8, 1, 1, 1, 0);
     if (v) CHECK(memcmp(vs_volume_data(v), den + 62, N) == 0, "den: data differ");
@@ -507,7 +456,7 @@ static void test_stacks(vs_context *ctx)
     {
         char p[1200];
         snprintf(p, sizeof p, "%s/README.txt", path);
-        write_bytes(p, "not a slice", 11);
+        tu_write_file(p, "not a slice", 11);
     }
     v = load(ctx, path, NULL);
     check_shape(v, "png folder", W, H, P, VS_U8, 1, 1, 1, 0);
@@ -522,13 +471,13 @@ static void test_stacks(vs_context *ctx)
         char p[1200];
         size_t n;
         snprintf(p, sizeof p, "%s/%s", path, fnames[z]);
-        unsigned char *png = read_bytes(p, &n);
+        unsigned char *png = tu_read_file(p, &n);
         off += tar_add(tar + off, members[z], png, n);
         free(png);
     }
     off += 1024; /* two zero blocks */
     path_of(path, sizeof path, "t_slices.tar");
-    write_bytes(path, tar, off);
+    tu_write_file(path, tar, off);
     v = load(ctx, path, NULL);
     check_shape(v, "png tar", W, H, P, VS_U8, 1, 1, 1, 0);
     if (v) CHECK(memcmp(vs_volume_data(v), sl, sizeof sl) == 0, "png tar: order or data differ");
@@ -537,19 +486,19 @@ static void test_stacks(vs_context *ctx)
     /* tar with a corrupt header: flip a name byte without fixing the checksum */
     tar[3] ^= 0x55;
     path_of(path, sizeof path, "corrupt_header.tar");
-    write_bytes(path, tar, off);
-    expect_fail(ctx, path, NULL, "tar corrupt header");
+    tu_write_file(path, tar, off);
+    tu_expect_load_fail(ctx, path, NULL, "tar corrupt header");
     /* tar cut in the middle of a member */
     tar[3] ^= 0x55;
     path_of(path, sizeof path, "cut_member.tar");
-    write_bytes(path, tar, 700);
-    expect_fail(ctx, path, NULL, "tar cut after a member");
+    tu_write_file(path, tar, 700);
+    tu_expect_load_fail(ctx, path, NULL, "tar cut after a member");
     path_of(path, sizeof path, "cut_data.tar");
-    write_bytes(path, tar, 530);
-    expect_fail(ctx, path, NULL, "tar cut in member data");
+    tu_write_file(path, tar, 530);
+    tu_expect_load_fail(ctx, path, NULL, "tar cut in member data");
     path_of(path, sizeof path, "cut_header.tar");
-    write_bytes(path, tar, 300);
-    expect_fail(ctx, path, NULL, "tar cut in a header");
+    tu_write_file(path, tar, 300);
+    tu_expect_load_fail(ctx, path, NULL, "tar cut in a header");
     free(tar);
 
     /* RGB slice -> Rec. 709 luminance */
@@ -584,7 +533,7 @@ static void test_stacks(vs_context *ctx)
         snprintf(p, sizeof p, "%s/1.png", path);
         io->write_pages(p, H, W, 1, 1, VS_PIX_U8, sl[1], 0, 0, NULL, err, sizeof err);
     }
-    expect_fail(ctx, path, NULL, "folder of mixed sizes");
+    tu_expect_load_fail(ctx, path, NULL, "folder of mixed sizes");
 }
 
 /* ---- hostile input ---- */
@@ -603,31 +552,31 @@ static void test_hostile(vs_context *ctx)
     for (size_t i = 0; i < sizeof buf; i++) buf[i] = (unsigned char)(i * 131 + 7);
 
     path_of(path, sizeof path, "short.raw");
-    write_bytes(path, buf, 1999);
-    expect_fail(ctx, path, &o, "raw too short");
+    tu_write_file(path, buf, 1999);
+    tu_expect_load_fail(ctx, path, &o, "raw too short");
     CHECK(strstr(vs_last_error(ctx), "truncated") != NULL, "short raw: %s", vs_last_error(ctx));
     path_of(path, sizeof path, "long.raw");
-    write_bytes(path, buf, 2003);
-    expect_fail(ctx, path, &o, "raw too long");
+    tu_write_file(path, buf, 2003);
+    tu_expect_load_fail(ctx, path, &o, "raw too long");
     CHECK(strstr(vs_last_error(ctx), "3 extra bytes") != NULL, "long raw: %s", vs_last_error(ctx));
     path_of(path, sizeof path, "short.raw.gz");
     write_gz(path, buf, 1000);
-    expect_fail(ctx, path, &o, "raw.gz too short");
+    tu_expect_load_fail(ctx, path, &o, "raw.gz too short");
     path_of(path, sizeof path, "long.raw.gz");
     write_gz(path, buf, 2100);
-    expect_fail(ctx, path, &o, "raw.gz too long");
+    tu_expect_load_fail(ctx, path, &o, "raw.gz too long");
     CHECK(strstr(vs_last_error(ctx), "100 extra bytes") != NULL, "long raw.gz: %s", vs_last_error(ctx));
     o.dims[0] = 0;
     path_of(path, sizeof path, "zero_dim.raw");
-    write_bytes(path, buf, 10);
-    expect_fail(ctx, path, &o, "raw zero dimension");
+    tu_write_file(path, buf, 10);
+    tu_expect_load_fail(ctx, path, &o, "raw zero dimension");
     o.dims[0] = o.dims[1] = o.dims[2] = 16000;
     path_of(path, sizeof path, "huge.raw.gz");
     write_gz(path, buf, 4096);
-    expect_fail(ctx, path, &o, "raw.gz claiming 16000^3");
+    tu_expect_load_fail(ctx, path, &o, "raw.gz claiming 16000^3");
     path_of(path, sizeof path, "noopts.raw");
-    write_bytes(path, buf, 1000);
-    expect_fail(ctx, path, NULL, "raw without options");
+    tu_write_file(path, buf, 1000);
+    tu_expect_load_fail(ctx, path, NULL, "raw without options");
 
     /* .den: truncated, huge, bad version */
     unsigned char den[62 + 100];
@@ -639,17 +588,17 @@ static void test_hostile(vs_context *ctx)
     den[58] = 1000 & 255;
     den[59] = 1000 >> 8;
     path_of(path, sizeof path, "truncated.den");
-    write_bytes(path, den, sizeof den);
-    expect_fail(ctx, path, NULL, "den truncated");
+    tu_write_file(path, den, sizeof den);
+    tu_expect_load_fail(ctx, path, NULL, "den truncated");
     CHECK(strstr(vs_last_error(ctx), "truncated") != NULL, "den: %s", vs_last_error(ctx));
     den[50] = den[52] = den[54] = 60000 & 255;
     den[51] = den[53] = den[55] = 60000 >> 8;
     path_of(path, sizeof path, "huge.den");
-    write_bytes(path, den, sizeof den);
-    expect_fail(ctx, path, NULL, "den claiming 60000^3");
+    tu_write_file(path, den, sizeof den);
+    tu_expect_load_fail(ctx, path, NULL, "den claiming 60000^3");
     path_of(path, sizeof path, "short_header.den");
-    write_bytes(path, den, 30);
-    expect_fail(ctx, path, NULL, "den short header");
+    tu_write_file(path, den, 30);
+    tu_expect_load_fail(ctx, path, NULL, "den short header");
 
     /* truncated .nii.gz */
     {
@@ -662,38 +611,38 @@ static void test_hostile(vs_context *ctx)
         write_nifti(path, 3, d, DT_F32, 32, unit, 0.0f, 0.0f, p, M * sizeof(float));
         free(p);
         size_t n;
-        unsigned char *b = read_bytes(path, &n);
+        unsigned char *b = tu_read_file(path, &n);
         CHECK(b && n > 1000, "nii.gz written");
         path_of(path, sizeof path, "truncated.nii.gz");
-        write_bytes(path, b, n / 2);
-        expect_fail(ctx, path, NULL, "nii.gz truncated");
+        tu_write_file(path, b, n / 2);
+        tu_expect_load_fail(ctx, path, NULL, "nii.gz truncated");
         path_of(path, sizeof path, "header_only.nii.gz");
-        write_bytes(path, b, 200);
-        expect_fail(ctx, path, NULL, "nii.gz cut in header");
+        tu_write_file(path, b, 200);
+        tu_expect_load_fail(ctx, path, NULL, "nii.gz cut in header");
         free(b);
         /* a header claiming 30000x30000x30000 over a tiny file */
         const int huge[4] = {30000, 30000, 30000, 1};
         path_of(path, sizeof path, "huge.nii");
         write_nifti(path, 3, huge, DT_U8, 8, unit, 0.0f, 0.0f, buf, 64);
-        expect_fail(ctx, path, NULL, "nii claiming 30000^3");
+        tu_expect_load_fail(ctx, path, NULL, "nii claiming 30000^3");
         const int big[4] = {1000, 1000, 1000, 1};
         path_of(path, sizeof path, "big.nii");
         write_nifti(path, 3, big, DT_U8, 8, unit, 0.0f, 0.0f, buf, 64);
-        expect_fail(ctx, path, NULL, "nii claiming 1000^3");
+        tu_expect_load_fail(ctx, path, NULL, "nii claiming 1000^3");
     }
     /* NRRD headers claiming more than the file holds */
     const char *nrrd_huge = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 60000 60000 60000\nencoding: raw\n\nxyz";
     path_of(path, sizeof path, "huge.nrrd");
-    write_bytes(path, nrrd_huge, strlen(nrrd_huge));
-    expect_fail(ctx, path, NULL, "nrrd claiming 60000^3");
+    tu_write_file(path, nrrd_huge, strlen(nrrd_huge));
+    tu_expect_load_fail(ctx, path, NULL, "nrrd claiming 60000^3");
     const char *nrrd_short = "NRRD0004\ntype: short\ndimension: 3\nsizes: 100 100 100\nendian: little\nencoding: raw\n\nxyz";
     path_of(path, sizeof path, "short.nrrd");
-    write_bytes(path, nrrd_short, strlen(nrrd_short));
-    expect_fail(ctx, path, NULL, "nrrd truncated");
+    tu_write_file(path, nrrd_short, strlen(nrrd_short));
+    tu_expect_load_fail(ctx, path, NULL, "nrrd truncated");
     const char *nrrd_gz = "NRRD0004\ntype: float\ndimension: 3\nsizes: 100 100 100\nendian: little\nencoding: gzip\n\nxyz";
     path_of(path, sizeof path, "badgz.nrrd");
-    write_bytes(path, nrrd_gz, strlen(nrrd_gz));
-    expect_fail(ctx, path, NULL, "nrrd bad gzip");
+    tu_write_file(path, nrrd_gz, strlen(nrrd_gz));
+    tu_expect_load_fail(ctx, path, NULL, "nrrd bad gzip");
 
     /* garbage with every extension, empty files, missing files */
     static const char *const exts[] = {".nii", ".nii.gz", ".nrrd", ".nhdr", ".tif", ".png", ".tar", ".den"};
@@ -701,39 +650,39 @@ static void test_hostile(vs_context *ctx)
         char name[64];
         snprintf(name, sizeof name, "garbage%s", exts[i]);
         path_of(path, sizeof path, name);
-        write_bytes(path, buf, sizeof buf);
-        expect_fail(ctx, path, NULL, name);
+        tu_write_file(path, buf, sizeof buf);
+        tu_expect_load_fail(ctx, path, NULL, name);
         snprintf(name, sizeof name, "empty%s", exts[i]);
         path_of(path, sizeof path, name);
-        write_bytes(path, buf, 0);
-        expect_fail(ctx, path, NULL, name);
+        tu_write_file(path, buf, 0);
+        tu_expect_load_fail(ctx, path, NULL, name);
         snprintf(name, sizeof name, "missing%s", exts[i]);
         path_of(path, sizeof path, name);
-        expect_fail(ctx, path, NULL, name);
+        tu_expect_load_fail(ctx, path, NULL, name);
     }
     vs_load_options_init(&o);
     o.raw = 1;
     o.dims[0] = o.dims[1] = o.dims[2] = 4;
     path_of(path, sizeof path, "empty.raw");
-    write_bytes(path, buf, 0);
-    expect_fail(ctx, path, &o, "empty raw");
+    tu_write_file(path, buf, 0);
+    tu_expect_load_fail(ctx, path, &o, "empty raw");
     path_of(path, sizeof path, "missing.raw");
-    expect_fail(ctx, path, &o, "missing raw");
+    tu_expect_load_fail(ctx, path, &o, "missing raw");
     path_of(path, sizeof path, "unknown.xyz");
-    write_bytes(path, buf, 100);
-    expect_fail(ctx, path, NULL, "unknown extension");
+    tu_write_file(path, buf, 100);
+    tu_expect_load_fail(ctx, path, NULL, "unknown extension");
     path_of(path, sizeof path, "emptyfolder");
     mkdir(path, 0755);
-    expect_fail(ctx, path, NULL, "empty folder");
+    tu_expect_load_fail(ctx, path, NULL, "empty folder");
     /* a FIFO must not hang the loader */
     path_of(path, sizeof path, "fifo.raw");
-    if (mkfifo(path, 0600) == 0) expect_fail(ctx, path, &o, "fifo");
+    if (mkfifo(path, 0600) == 0) tu_expect_load_fail(ctx, path, &o, "fifo");
     /* bad spacing override */
     vs_load_options_init(&o);
     o.has_spacing = 1;
     o.spacing[1] = 0.0;
     path_of(path, sizeof path, "t.den");
-    expect_fail(ctx, path, &o, "zero spacing override");
+    tu_expect_load_fail(ctx, path, &o, "zero spacing override");
 }
 
 /* Does this process have OpenImageIO mapped? */
@@ -784,11 +733,7 @@ int main(void)
 {
     vs_context *ctx;
     if (vs_context_create(&ctx) != VS_OK) return 1;
-    snprintf(tmp, sizeof tmp, "%s/vsplat_test_load_XXXXXX", tu_tmpdir());
-    if (!mkdtemp(tmp)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (!tu_make_tmpdir(tmp, sizeof tmp, "test_load")) return 1;
     printf("temporary files in %s\n", tmp);
     test_io_module_lazy(ctx);
     test_real(ctx);
@@ -797,11 +742,7 @@ int main(void)
     test_raw_den(ctx);
     test_stacks(ctx);
     test_hostile(ctx);
-    if (!tu_failures) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
-        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmp);
-    }
+    tu_remove_tmpdir(tmp);
     vs_context_release(ctx);
     TEST_DONE();
 }

@@ -5,14 +5,6 @@
 
 #include <math.h>
 
-static vs_volume *scene(vs_context *ctx, const char *spec)
-{
-    vs_volume *v = NULL;
-    vs_status st = vs_volume_scene(ctx, spec, &v);
-    CHECK(st == VS_OK && v, "scene %s: %s", spec, vs_last_error(ctx));
-    return v;
-}
-
 static void check_shape(const vs_volume *v, const char *name, int nx, int ny, int nz, vs_type t,
                         double sx, double sy, double sz)
 {
@@ -87,7 +79,7 @@ int main(void)
     if (vs_context_create(&ctx) != VS_OK) return 1;
 
     /* cube: the 8^3 block centred in 16^3 */
-    vs_volume *v = scene(ctx, "cube");
+    vs_volume *v = tu_scene(ctx, "cube");
     if (v) {
         check_shape(v, "cube", 16, 16, 16, VS_F32, 1, 1, 1);
         CHECK(v->has_analytic, "cube analytic");
@@ -110,13 +102,13 @@ int main(void)
         CHECK(g[0] == 0 && g[1] == 0 && g[2] == 1, "cube -z face gradient %g %g %g", g[0], g[1], g[2]);
         vs_volume_release(v);
     }
-    v = scene(ctx, "cube:8");
+    v = tu_scene(ctx, "cube:8");
     if (v) {
         check_samples(v, "cube:8");
         vs_volume_release(v);
     }
 
-    v = scene(ctx, "sphere");
+    v = tu_scene(ctx, "sphere");
     if (v) {
         check_shape(v, "sphere", 64, 64, 64, VS_F32, 1, 1, 1);
         CHECK(v->has_analytic, "sphere analytic");
@@ -126,7 +118,7 @@ int main(void)
         vs_volume_release(v);
     }
 
-    v = scene(ctx, "ml");
+    v = tu_scene(ctx, "ml");
     if (v) {
         check_shape(v, "ml", 41, 41, 41, VS_F32, 1, 1, 1);
         check_samples(v, "ml");
@@ -139,14 +131,14 @@ int main(void)
         CHECK(fabs(v->analytic.f(v->analytic.params, p) - 1.0) < 1e-12, "ml(0,0,-1) = 1");
         vs_volume_release(v);
     }
-    v = scene(ctx, "ml:64");
+    v = tu_scene(ctx, "ml:64");
     if (v) {
         check_gradient(v, "ml:64", NULL);
         vs_volume_release(v);
     }
 
     double t = vs_now_ms();
-    v = scene(ctx, "head");
+    v = tu_scene(ctx, "head");
     printf("head: %.0f ms\n", vs_now_ms() - t);
     if (v) {
         check_shape(v, "head", 256, 256, 145, VS_F32, 1, 1, 1);
@@ -172,7 +164,7 @@ int main(void)
               "head inner skull normal %g %g %g", g[0], g[1], g[2]);
         vs_volume_release(v);
     }
-    v = scene(ctx, "head:64");
+    v = tu_scene(ctx, "head:64");
     if (v) {
         check_shape(v, "head:64", 64, 64, 36, VS_F32, 1, 1, 1);
         check_samples(v, "head:64");
@@ -180,7 +172,7 @@ int main(void)
     }
 
     t = vs_now_ms();
-    v = scene(ctx, "cell");
+    v = tu_scene(ctx, "cell");
     double ms_cell = vs_now_ms() - t;
     printf("cell: %.0f ms\n", ms_cell);
     if (v) {
@@ -193,14 +185,14 @@ int main(void)
         printf("cell: %.2f%% of voxels above iso %.0f, range %.0f..%.0f\n", 100.0 * above / n, v->default_iso,
                v->vmin, v->vmax);
         CHECK(above > n / 1000 && above < n / 5, "cell: %zu voxels above iso", above);
-        vs_volume *w = scene(ctx, "cell");
+        vs_volume *w = tu_scene(ctx, "cell");
         if (w) {
             CHECK(memcmp(v->data, w->data, n) == 0, "cell generation is deterministic");
             vs_volume_release(w);
         }
         vs_volume_release(v);
     }
-    v = scene(ctx, "cell:64");
+    v = tu_scene(ctx, "cell:64");
     if (v) {
         check_shape(v, "cell:64", 64, 64, 10, VS_U8, 1, 1, 2.5);
         vs_volume_release(v);

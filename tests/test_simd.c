@@ -1,4 +1,4 @@
-/* Every SIMD kernel against the scalar reference (src/kernels.c) on every
+/* Every SIMD kernel against the scalar reference (src/kernels/scalar.c) on every
  * ISA this CPU has: seeded random inputs, lengths 0 .. 3 x vector width + 1,
  * unaligned pointers, tails, zero and one weights.  Tolerance: none — the
  * kernels do one multiply and one add per element in the reference's order
@@ -17,7 +17,6 @@
 
 
 typedef void (*row4_fn)(float *, const float *, const float *, int);
-typedef void (*gs_fn)(float *, const float *, const float *, const float *, int);
 
 static unsigned rng_state = 12345u;
 static float frand(void)
@@ -28,35 +27,26 @@ static float frand(void)
 
 enum { MAXN = 3 * 16 + 1, PAD = 8 };
 
-static void check_row4(const char *isa, row4_fn fn, int is_gs, gs_fn gfn)
+static void check_row4(const char *isa, row4_fn fn)
 {
-    float ref[4 * (MAXN + PAD)], out[4 * (MAXN + PAD)], ex[MAXN + PAD], exd[MAXN + PAD];
+    float ref[4 * (MAXN + PAD)], out[4 * (MAXN + PAD)], ex[MAXN + PAD];
     const float weights[3][4] = {{0.3f, -1.5f, 2.0f, 1e-3f}, {0, 0, 0, 0}, {1, 1, 1, 1}};
     int cases = 0;
     for (int n = 0; n <= MAXN; n++)
         for (int off = 0; off < 4; off++) /* unaligned starts */
             for (int wi = 0; wi < 3; wi++) {
                 for (int i = 0; i < 4 * (MAXN + PAD); i++) ref[i] = out[i] = frand();
-                for (int i = 0; i < MAXN + PAD; i++) {
-                    ex[i] = frand();
-                    exd[i] = frand();
-                }
-                if (is_gs) {
-                    vs_splat_row_gs_scalar(ref + off, ex + off, exd + off, weights[wi], n);
-                    gfn(out + off, ex + off, exd + off, weights[wi], n);
-                } else {
-                    vs_splat_row4_scalar(ref + off, ex + off, weights[wi], n);
-                    fn(out + off, ex + off, weights[wi], n);
-                }
+                for (int i = 0; i < MAXN + PAD; i++) ex[i] = frand();
+                vs_splat_row4_scalar(ref + off, ex + off, weights[wi], n);
+                fn(out + off, ex + off, weights[wi], n);
                 /* includes the floats around the span: nothing outside may change */
                 if (memcmp(ref, out, sizeof ref) != 0) {
-                    CHECK(0, "%s %s differs from scalar at n=%d offset=%d weights %d", is_gs ? "splat_row_gs" : "splat_row4",
-                          isa, n, off, wi);
+                    CHECK(0, "splat_row4 %s differs from scalar at n=%d offset=%d weights %d", isa, n, off, wi);
                     return;
                 }
                 cases++;
             }
-    printf("%-13s %-7s bit-identical to scalar in %d cases\n", is_gs ? "splat_row_gs" : "splat_row4", isa, cases);
+    printf("%-13s %-7s bit-identical to scalar in %d cases\n", "splat_row4", isa, cases);
 }
 
 /* Footprint blocks: rows 0..9, 0 .. 2 x 16 + 1 vectors (tails of the
@@ -880,7 +870,7 @@ static void check_dispatch(void)
         vs_isa want = (vs_isa)cap > best ? best : (vs_isa)cap;
         CHECK(k.isa == want, "cap %s gave %s, expected %s", vs_isa_name((vs_isa)cap), vs_isa_name(k.isa),
               vs_isa_name(want));
-        CHECK(k.splat_row1 && k.splat_row4 && k.splat_row_gs && k.composite && k.splat_block && k.splat_block_mix &&
+        CHECK(k.splat_row1 && k.splat_row4 && k.composite && k.splat_block && k.splat_block_mix &&
                   k.classify_cd && k.classify_gs && k.shade_lut && k.splat_voxel1 && k.splat_voxel4 &&
                   k.splat_voxel_gs && k.splat_rows_mix && k.project_brick && k.place_voxels,
               "cap %s: empty entry",
@@ -920,16 +910,14 @@ int main(void)
           "place_voxels scalar reference disagrees with the brute-force occlusion, vs_block_place_at or vs_fp_depth");
     CHECK(check_place(NULL, place_off, 0) > 0, "check_place cannot tell a wrong kernel from the reference");
     if (best >= VS_ISA_SSE4) {
-        check_row4("sse4", vs_splat_row4_sse4, 0, NULL);
-        check_row4("sse4", NULL, 1, vs_splat_row_gs_sse4);
+        check_row4("sse4", vs_splat_row4_sse4);
         check_block("sse4", vs_splat_block_sse4);
         check_block_mix("sse4", vs_splat_block_mix_sse4);
     } else {
         printf("SKIP: sse4 kernels: this CPU has no SSE4.1\n");
     }
     if (best >= VS_ISA_AVX2) {
-        check_row4("avx2", vs_splat_row4_avx2, 0, NULL);
-        check_row4("avx2", NULL, 1, vs_splat_row_gs_avx2);
+        check_row4("avx2", vs_splat_row4_avx2);
         check_block("avx2", vs_splat_block_avx2);
         check_block_mix("avx2", vs_splat_block_mix_avx2);
         check_classify("avx2", vs_classify_cd_avx2, &fx);
@@ -946,7 +934,7 @@ int main(void)
         printf("SKIP: avx2 kernels: this CPU has no AVX2\n");
     }
     if (best >= VS_ISA_AVX512) {
-        check_row4("avx512", vs_splat_row4_avx512, 0, NULL);
+        check_row4("avx512", vs_splat_row4_avx512);
         check_block("avx512", vs_splat_block_avx512);
         check_project("avx512", vs_project_brick_avx512);
         check_voxel("avx512", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx512);

@@ -33,13 +33,6 @@ static double rss_mb(void)
     return (double)res * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 /* A ball of radius r at centre (cx, cy, cz), linear ramp, 0..1 exactly
  * (the range does not depend on r or the centre). */
 static vs_volume *ball(int n, double cx, double cy, double cz, double r)
@@ -147,7 +140,7 @@ int main(void)
         TEST_DONE();
     }
     const long warm = frames / 4, step = frames / 20 > 0 ? frames / 20 : 1;
-    double rss0 = -1, rss_max = 0, rss_first = rss_mb(), t0 = now_s();
+    double rss0 = -1, rss_max = 0, rss_first = rss_mb(), t0 = tu_now_s();
     unsigned long long splatted = 0;
     int failures = 0;
     for (long f = 0; f < frames; f++) {
@@ -193,7 +186,7 @@ int main(void)
             printf("frame %6ld  rss %.1f MB\n", f, r);
         }
     }
-    double rss_end = rss_mb(), secs = now_s() - t0;
+    double rss_end = rss_mb(), secs = tu_now_s() - t0;
     printf("%ld frames in %.1f s (%.1f ms/frame), %llu voxel-sheet splats; rss: start %.1f MB, after warm-up %.1f MB, "
            "max %.1f MB, end %.1f MB\n",
            frames, secs, 1e3 * secs / frames, splatted, rss_first, rss0, rss_max, rss_end);

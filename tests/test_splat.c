@@ -219,11 +219,8 @@ static double edge_width(const vs_image *img)
 
 static void test_cube_edges(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "cube", &v) != VS_OK) {
-        CHECK(0, "cube scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "cube");
+    if (!v) return;
     double w[4];
     for (int p = 0; p < 4; p++) {
         vs_settings s;
@@ -260,11 +257,8 @@ static double f_ball(int i, int j, int k)
 static void test_invariance_of(vs_volume *v, const char *name);
 static void test_invariance(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "ml", &v) != VS_OK) {
-        CHECK(0, "ml scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "ml");
+    if (!v) return;
     test_invariance_of(v, "ml");
     vs_volume_release(v);
     const int dims[3] = {32, 32, 20};
@@ -371,11 +365,8 @@ static void test_invariance_of(vs_volume *v, const char *name)
  * and sizes first must give the same image as a fresh one. */
 static void test_shading_table_cache(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "sphere", &v) != VS_OK) {
-        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "sphere");
+    if (!v) return;
     vs_settings s[4];
     for (int i = 0; i < 4; i++) {
         vs_settings_init(&s[i]);
@@ -421,8 +412,7 @@ static void test_context_reuse(void)
     const char *scenes[] = {"cube", "sphere", "ml"};
     vs_volume *v[3];
     for (int i = 0; i < 3; i++)
-        if (vs_volume_scene(ctx, scenes[i], &v[i]) != VS_OK) {
-            CHECK(0, "%s scene: %s", scenes[i], vs_last_error(ctx));
+        if (!(v[i] = tu_scene(ctx, scenes[i]))) {
             for (int j = 0; j < i; j++) vs_volume_release(v[j]);
             return;
         }
@@ -535,11 +525,8 @@ static double psnr_rgb(const vs_image *a, const vs_image *b)
 
 static void test_against_raycaster(const char *scene, int analytic, int size, double fov, double min_post_cd)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, scene, &v) != VS_OK) {
-        CHECK(0, "%s scene: %s", scene, vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, scene);
+    if (!v) return;
     vs_settings s;
     vs_settings_init(&s);
     s.width = s.height = size;
@@ -583,11 +570,8 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
  * pixels), 10 % larger than the orthographic f R / D. */
 static void test_perspective_silhouette(void)
 {
-    vs_volume *v;
-    if (vs_volume_scene(ctx, "sphere", &v) != VS_OK) {
-        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
-        return;
-    }
+    vs_volume *v = tu_scene(ctx, "sphere");
+    if (!v) return;
     vs_settings s;
     vs_settings_init(&s);
     s.width = s.height = 256;
@@ -677,7 +661,7 @@ static void test_skewed_tables(void)
     vs_volume_release(v);
 }
 
-/* Post-gs with an unskewed footprint: src/tile.c adds a section with
+/* Post-gs with an unskewed footprint: src/rasterize.c adds a section with
  * splat_rows_mix from the block's column and row factors and each pixel's
  * offset from the centre, instead of the gradient block that
  * vs_block_build_skewed builds and splat_block_mix adds; the two must give
@@ -685,7 +669,7 @@ static void test_skewed_tables(void)
 static int gs_unskewed_same(const vs_block_geom *g, float row_shift, float cx, float cy, unsigned seed)
 {
     const int maxvec = vs_block_skewed_nvec(g, row_shift, 4), nv = (g->nx * 4 + 7) / 8, npx = 2 * nv;
-    if (npx > VS_VOXEL1_MAX) return 1; /* src/tile.c takes the block then */
+    if (npx > VS_VOXEL1_MAX) return 1; /* src/rasterize.c takes the block then */
     const size_t bs = (size_t)8 * maxvec;
     float *blk = malloc((size_t)g->ny * bs * sizeof(float));
     float *a = calloc((size_t)g->ny * bs, sizeof(float)), *b = calloc((size_t)g->ny * bs, sizeof(float));
@@ -787,7 +771,7 @@ static void test_skewed_blocks(void)
                 const double rel = fabs(sum - truth_sum) / truth_sum;
                 if (rel > worst_sum) worst_sum = rel;
                 if (f.row_shift == 0.0f) {
-                    /* no skew: src/tile.c adds such footprints with the
+                    /* no skew: src/rasterize.c adds such footprints with the
                      * fused voxel kernel from a placement and factors
                      * instead of this block; it must give the same floats */
                     vs_block_place p;

@@ -353,8 +353,7 @@ static void test_presets(void)
 
 int main(void)
 {
-    snprintf(dir, sizeof dir, "%s/vsplat_tf_%ld", tu_tmpdir(), (long)getpid());
-    mkdir(dir, 0700);
+    if (!tu_make_tmpdir(dir, sizeof dir, "tf")) return 1;
     if (vs_context_create(&ctx) != VS_OK) return 1;
     int dims[3] = {8, 8, 8};
     double sp[3] = {1, 1, 1};
@@ -375,8 +374,6 @@ int main(void)
 
     vs_volume_release(vol);
     vs_context_release(ctx);
-    char cmd[1200];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
+    tu_remove_tmpdir(dir);
     TEST_DONE();
 }

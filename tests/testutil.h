@@ -1,5 +1,6 @@
-/* Minimal test helpers: CHECK counts failures; TEST_DONE returns the exit
- * code.  A test that needs absent data prints "SKIP: why" and returns 0. */
+/* Test helpers shared by tests/test_*.c: CHECK counts failures; TEST_DONE
+ * returns the exit code.  A test that needs absent data prints "SKIP: why"
+ * and returns 0.  Helpers two tests need live here, not in copies. */
 #ifndef VS_TESTUTIL_H
 #define VS_TESTUTIL_H
 #include "vsplat.h"
@@ -9,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 
 static int tu_failures = 0;
 #define CHECK(cond, ...)                                                         \
@@ -61,5 +63,89 @@ static inline const char *tu_tmpdir(void)
 {
     const char *t = getenv("TMPDIR");
     return (t && *t) ? t : "/tmp";
+}
+
+/* Monotonic wall clock, seconds. */
+static inline double tu_now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+/* The whole file, malloc'ed with one spare byte, its size in *n; NULL (and
+ * *n = 0) if it cannot be read. */
+static inline unsigned char *tu_read_file(const char *path, size_t *n)
+{
+    *n = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    long len = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    unsigned char *b = len >= 0 && fseek(f, 0, SEEK_SET) == 0 ? malloc((size_t)len + 1) : NULL;
+    if (b) *n = fread(b, 1, (size_t)len, f);
+    fclose(f);
+    return b;
+}
+
+/* Write a test input; a test that cannot write its inputs stops. */
+static inline void tu_write_file(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f) {
+        fprintf(stderr, "cannot create %s\n", path);
+        exit(1);
+    }
+    if (n && fwrite(data, 1, n, f) != n) exit(1);
+    fclose(f);
+}
+
+/* A synthetic scene (vs_volume_scene), or NULL after a failed check. */
+static inline vs_volume *tu_scene(vs_context *ctx, const char *spec)
+{
+    vs_volume *v = NULL;
+    vs_status st = vs_volume_scene(ctx, spec, &v);
+    CHECK(st == VS_OK && v, "scene %s: %s", spec, vs_last_error(ctx));
+    return st == VS_OK ? v : NULL;
+}
+
+/* Loading path must fail within 5 s, clear the output and name the file in
+ * the message; why says what is wrong with it. */
+static inline void tu_expect_load_fail(vs_context *ctx, const char *path, const vs_load_options *o, const char *why)
+{
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    vs_volume *v = (vs_volume *)1;
+    double t0 = tu_now_s();
+    vs_status st = vs_volume_load(ctx, path, o, &v);
+    double dt = tu_now_s() - t0;
+    const char *msg = vs_last_error(ctx);
+    CHECK(st != VS_OK, "%s (%s): loaded although it should fail", base, why);
+    CHECK(v == NULL, "%s (%s): out not cleared", base, why);
+    CHECK(msg && *msg && strstr(msg, base), "%s (%s): message '%s' does not name the file", base, why, msg);
+    CHECK(dt < 5.0, "%s (%s): took %.1f s", base, why, dt);
+    if (st == VS_OK) vs_volume_release(v);
+    printf("  %-34s -> %s: %s\n", why, vs_status_string(st), msg);
+}
+
+/* A fresh folder TMPDIR/vsplat_NAME_XXXXXX into buf; 0 (with a message)
+ * if it cannot be made. */
+static inline int tu_make_tmpdir(char *buf, size_t cap, const char *name)
+{
+    snprintf(buf, cap, "%s/vsplat_%s_XXXXXX", tu_tmpdir(), name);
+    if (mkdtemp(buf)) return 1;
+    perror("mkdtemp");
+    return 0;
+}
+
+/* Remove a test's folder, unless a check failed: then it stays for a look. */
+static inline void tu_remove_tmpdir(const char *dir)
+{
+    if (tu_failures) {
+        fprintf(stderr, "kept %s\n", dir);
+        return;
+    }
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
 }
 #endif

@@ -1,4 +1,4 @@
-/* vsplat — command-line tool: render, info, compare (DESIGN.md §2).
+/* vsplat — command-line tool: render, info, compare (docs/DESIGN.md §2).
  *
  * Exit codes: 0 success, 1 bad input or usage (one line on stderr naming the
  * file or option and the problem), 2 internal error (out of memory, bug). */

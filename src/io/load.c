@@ -130,6 +130,7 @@ vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_option
     if (!*path) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: empty file name");
     /* the caller's layout into the library's own (src/abi.c) */
     vs_load_options full;
+    vs_load_options_init(&full);
     vs_status rc = vs_load_options_import(ctx, opt, &full);
     if (rc != VS_OK) return rc;
     opt = &full;

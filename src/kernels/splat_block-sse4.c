@@ -1,6 +1,6 @@
 /* Footprint blocks into a sheet, SSE4.1: each 8-float block vector as two
  * 4-float halves, multiply then add exactly as the scalar reference
- * (src/kernels.c; no FMA, see src/kernels.h). */
+ * (scalar.c; no FMA, see kernels.h). */
 #include "kernels.h"
 
 #include <smmintrin.h>

@@ -23,18 +23,6 @@ void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n)
     }
 }
 
-void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n)
-{
-    for (int i = 0; i < n; i++) {
-        float h = ex[i];
-        float *p = row4 + 4 * i;
-        p[0] += c[0] * h;
-        p[1] += c[1] * exd[i];
-        p[2] += c[2] * h;
-        p[3] += c[3] * h;
-    }
-}
-
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr)
 {
     int crossed = 0;
@@ -65,7 +53,7 @@ void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t
 }
 
 /* Table coordinate of a value, in double as the per-pixel look-ups in
- * src/tile.c always did (the SIMD versions convert to double too, so the
+ * src/rasterize.c always did (the SIMD versions convert to double too, so the
  * images did not change when those loops became kernels). */
 static inline float tab_coord(const vs_shade_tabs *T, float v)
 {
@@ -109,7 +97,7 @@ void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstri
     for (int i = 0; i < n; i++) {
         if (!(alpha[i] > 0.0f)) continue;
         float *c = g + 3 * i;
-        /* vs_shade_lut_eval (src/normals.h), on the eye-frame gradient */
+        /* vs_shade_lut_eval (src/shade_lut.h), on the eye-frame gradient */
         float gx = c[0] * T->ppm, gy = c[1] * T->ppm, gz = c[2] * T->zpm;
         float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
         float m = ax > ay ? ax : ay;
@@ -255,7 +243,7 @@ static inline float depth_at(const vs_place_in *P, float z)
     return vs_depth_lookup(P->depth, P->depth_n, P->depth_scale, P->rz, z);
 }
 
-/* exp(-kappa b^2) inside the kernel's depth radius, else 0 (as src/tile.c's
+/* exp(-kappa b^2) inside the kernel's depth radius, else 0 (as src/rasterize.h's
  * make_section) */
 static inline float exp_at(const vs_place_in *P, float b)
 {

@@ -1,6 +1,6 @@
 /* Footprint blocks into a sheet, AVX-512F: two block vectors per register,
  * an odd last one in a 256-bit register; multiply then add exactly as the
- * scalar reference (src/kernels.c; no FMA, see src/kernels.h).  A one-vector
+ * scalar reference (scalar.c; no FMA, see kernels.h).  A one-vector
  * row stays in a 256-bit register. */
 #include "kernels.h"
 

@@ -1,5 +1,5 @@
 /* Voxel transform and binning, AVX2: eight voxels a step, multiply then add
- * in the scalar reference's order (src/kernels.c; no FMA, src/kernels.h),
+ * in the scalar reference's order (scalar.c; no FMA, kernels.h),
  * the kept lanes written out in order from the comparison mask. */
 #include "kernels.h"
 

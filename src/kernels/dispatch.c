@@ -1,6 +1,6 @@
 /* Kernel selection: the scalar reference first, then each kernel upgraded
  * to the best ISA that this CPU and the cap allow, where a version exists
- * (only where it measured faster: `vsplat-bench kernels`, simd/README.md).
+ * (only where it measured faster: `vsplat-bench kernels`, docs/PERFORMANCE.md).
  * The choice lives in the caller's table (one per frame), never in a
  * global. */
 #include "kernels.h"
@@ -25,7 +25,6 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->isa = VS_ISA_SCALAR;
     k->splat_row1 = vs_splat_row1_scalar;
     k->splat_row4 = vs_splat_row4_scalar;
-    k->splat_row_gs = vs_splat_row_gs_scalar;
     k->composite = vs_composite_scalar;
     k->splat_block = vs_splat_block_scalar;
     k->splat_block_mix = vs_splat_block_mix_scalar;
@@ -42,14 +41,12 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     if (cap >= VS_ISA_SSE4) {
         k->isa = VS_ISA_SSE4;
         k->splat_row4 = vs_splat_row4_sse4;
-        k->splat_row_gs = vs_splat_row_gs_sse4;
         k->splat_block = vs_splat_block_sse4;
         k->splat_block_mix = vs_splat_block_mix_sse4;
     }
     if (cap >= VS_ISA_AVX2) {
         k->isa = VS_ISA_AVX2;
         k->splat_row4 = vs_splat_row4_avx2;
-        k->splat_row_gs = vs_splat_row_gs_avx2;
         k->splat_block = vs_splat_block_avx2;
         k->splat_block_mix = vs_splat_block_mix_avx2; /* also for avx512 */
         k->classify_cd = vs_classify_cd_avx2;

@@ -1,6 +1,6 @@
 /* Voxel activation (occlusion test, block placement, depth integrals),
  * AVX-512: sixteen voxels a call, the scalar reference's operations in its
- * order (src/kernels.c), table and summed-area look-ups by masked gathers
+ * order (scalar.c), table and summed-area look-ups by masked gathers
  * (masked so that a culled or empty lane reads nothing). */
 #include "kernels.h"
 

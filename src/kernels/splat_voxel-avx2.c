@@ -1,7 +1,8 @@
-/* One density voxel into all its sheets, AVX2: each 8-pixel vector of a
- * footprint row is built once in a register (column weights times the row
- * weight, zeroed outside the radius) and added to every sheet; multiply then
- * add as the scalar reference (src/kernels.c; no FMA, src/kernels.h). */
+/* One voxel into all its sheets, AVX2 (splat_voxel1, splat_voxel4,
+ * splat_voxel_gs): each 8-pixel vector of a footprint row is built once in
+ * a register (column weights times the row weight, zeroed outside the
+ * radius) and added to every sheet; multiply then add as the scalar
+ * reference (scalar.c; no FMA, kernels.h). */
 #include "kernels.h"
 
 #include <immintrin.h>
@@ -86,37 +87,4 @@ void vs_splat_voxel_gs_avx2(float *const *dst, const float *w, int ns, ptrdiff_t
                             const float *dx, const float *dy, int rows, int nvec, float thr)
 {
     voxel4_rows(dst, w, ns, ds, cw, rw, dx, dy, rows, nvec, thr, 1);
-}
-
-/* A gradient-splat section's rows built in registers and mixed as
- * splat_block_mix does (simd/block-avx2.c): per 8-float vector of two
- * pixels, h, hx and hy spread over each pixel's four channels. */
-void vs_splat_rows_mix_avx2(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
-                            const float *dy, int rows, int nvec, float thr, const float m[12])
-{
-    const __m256 t = _mm256_set1_ps(thr);
-    const __m256 m0 = _mm256_setr_ps(m[0], m[3], m[6], m[9], m[0], m[3], m[6], m[9]);
-    const __m256 m1 = _mm256_setr_ps(m[1], m[4], m[7], m[10], m[1], m[4], m[7], m[10]);
-    const __m256 m2 = _mm256_setr_ps(m[2], m[5], m[8], m[11], m[2], m[5], m[8], m[11]);
-    const __m256i spread[4] = {_mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1), _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3),
-                               _mm256_setr_epi32(4, 4, 4, 4, 5, 5, 5, 5), _mm256_setr_epi32(6, 6, 6, 6, 7, 7, 7, 7)};
-    for (int r = 0; r < rows; r++) {
-        const __m256 ry = _mm256_set1_ps(rw[r]), y8 = _mm256_set1_ps(dy[r]);
-        float *d = dst + r * ds;
-        for (int v = 0; v < nvec; v += 4) {
-            __m256 h8 = _mm256_mul_ps(_mm256_loadu_ps(cw + 2 * v), ry);
-            h8 = _mm256_and_ps(h8, _mm256_cmp_ps(h8, t, _CMP_GT_OQ));
-            const __m256 x8 = _mm256_loadu_ps(dx + 2 * v);
-            const int nq = nvec - v < 4 ? nvec - v : 4;
-            for (int q = 0; q < nq; q++) {
-                const __m256 h = _mm256_permutevar8x32_ps(h8, spread[q]);
-                const __m256 hx = _mm256_mul_ps(h, _mm256_permutevar8x32_ps(x8, spread[q]));
-                const __m256 hy = _mm256_mul_ps(h, y8);
-                const __m256 a = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(m0, h), _mm256_mul_ps(m1, hx)),
-                                               _mm256_mul_ps(m2, hy));
-                float *p = d + 8 * (v + q);
-                _mm256_storeu_ps(p, _mm256_add_ps(_mm256_loadu_ps(p), a));
-            }
-        }
-    }
 }

@@ -1,7 +1,8 @@
 /* The inner loops that SIMD code may replace, as a table of function
  * pointers chosen per frame (libjpeg-turbo style): filled with the scalar
- * reference in src/kernels.c first, then upgraded best ISA first by
- * simd/dispatch.c, capped by the settings and VSPLAT_ISA.
+ * reference (scalar.c) first, then upgraded best ISA first by dispatch.c,
+ * capped by the settings and VSPLAT_ISA.  Each family has one file per ISA,
+ * FAMILY-ISA.c, built with that ISA's flags (cmake/SimdFlags.cmake).
  *
  * Every kernel does one multiply and one add per element in the same order
  * as the scalar reference (no fused multiply-add), so each ISA gives
@@ -16,7 +17,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Tables of the post-shaded classification and LUT shading (src/normals.h),
+/* Tables of the post-shaded classification and LUT shading (src/shade_lut.h),
  * gathered per sheet from the frame so the kernels need no internal
  * headers.  The 8- and 16-bit tables have 4 bytes of padding at the end:
  * SIMD versions read them with 32-bit gathers and mask. */
@@ -33,7 +34,7 @@ typedef struct vs_shade_tabs {
     const uint16_t *phi_bin;
     const float *diffuse, *specular;
 } vs_shade_tabs;
-/* Entries of the classification tables (VS_TF_TABLE in internal.h). */
+/* Entries of the classification tables (VS_TF_TABLE in classify.h). */
 #define VS_KTAB 4096
 
 /* What project_brick needs: the view position of a brick's corner voxel,
@@ -56,7 +57,7 @@ typedef struct vs_project_in {
 /* Voxels one place_voxels call takes at most. */
 #define VS_PLACE_BATCH 16
 /* What place_voxels needs: the tile's occlusion map, the footprint block's
- * geometry and the depth integral's table (src/tile.c, src/block.h,
+ * geometry and the depth integral's table (src/activate.c, src/block.h,
  * src/footprint.h). */
 typedef struct vs_place_in {
     const int *sat;         /* summed-area table of the tile's opaque pixels,
@@ -103,9 +104,6 @@ typedef struct vs_kernels {
     void (*splat_row1)(float *row, const float *ex, float w, int n);
     /* row4[4i + c] += w[c] * ex[i]: four interleaved channels */
     void (*splat_row4)(float *row4, const float *ex, const float w[4], int n);
-    /* gradient splats: row4[4i] += c[0] ex[i], [4i+1] += c[1] exd[i],
-     * [4i+2] += c[2] ex[i], [4i+3] += c[3] ex[i] */
-    void (*splat_row_gs)(float *row4, const float *ex, const float *exd, const float c[4], int n);
     /* front-to-back over one span: for alpha[i] > 0,
      *   w = (1 - acc[4i+3]) * alpha[i]; acc[4i+c] += w * rgb[3i+c]; acc[4i+3] += w (<= 1);
      * returns how many pixels crossed the opacity threshold thr */
@@ -179,35 +177,65 @@ typedef struct vs_kernels {
      * or none at all), and for those set, out's lane i holds the block
      * placement and the nd slab integrals
      *   D[j] = G((opening + j + 1) slab - z) - G((opening + j) slab - z)
-     * and (with P->colw) the block's factors, exactly as src/tile.c and
+     * and (with P->colw) the block's factors, exactly as src/activate.c and
      * src/block.h compute them one by one */
     unsigned (*place_voxels)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 } vs_kernels;
 
-/* Scalar reference kernels (src/kernels.c). */
+/* Kernel types, for the tests and the kernel benchmark, which call the
+ * versions directly. */
+typedef void (*vs_splat_block_fn)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                                  const float w8[8]);
+typedef void (*vs_splat_rows_mix_fn)(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                                     const float *dy, int rows, int nvec, float thr, const float m[12]);
+typedef void (*vs_splat_voxel1_fn)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
+                                   const float *rw, int rows, int nvec, float thr);
+typedef void (*vs_splat_voxel_gs_fn)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
+                                     const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr);
 typedef unsigned (*vs_place_voxels_fn)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
-unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
-unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
-unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
+typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const float *qp, const float *qn,
+                                  ptrdiff_t stride, int n, const vs_shade_tabs *T);
+typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
+                                const vs_shade_tabs *T);
+typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
+
+/* The versions, by family: the scalar reference of every kernel is in
+ * scalar.c, the SIMD ones in FAMILY-ISA.c (declared once here for the
+ * dispatch, the tests and the kernel benchmark; call them only where the
+ * CPU has the ISA).  A kernel without a version for an ISA takes the one
+ * below it: where a version measured no faster it was not kept (the
+ * post-shaded sheet kernels have no AVX-512 version, docs/PERFORMANCE.md). */
+
+/* splat_row: splat_row1 (scalar only), splat_row4 */
 void vs_splat_row1_scalar(float *row, const float *ex, float w, int n);
 void vs_splat_row4_scalar(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_scalar(float *row4, const float *ex, const float *exd, const float c[4], int n);
-int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);
+void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
+void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
+
+/* splat_block: splat_block, splat_block_mix, splat_rows_mix */
+void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8]);
+void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                         const float w8[8]);
+void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
+                           const float w8[8]);
 void vs_splat_block_mix_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                                const float m[12]);
 void vs_splat_block_mix_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                              const float m[12]);
 void vs_splat_block_mix_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                              const float m[12]);
-void vs_splat_block_scalar(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                           const float w8[8]);
+void vs_splat_rows_mix_scalar(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                              const float *dy, int rows, int nvec, float thr, const float m[12]);
+void vs_splat_rows_mix_avx2(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
+                            const float *dy, int rows, int nvec, float thr, const float m[12]);
 
-void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
-                           ptrdiff_t stride, int n, const vs_shade_tabs *T);
-void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
-void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
-typedef void (*vs_splat_voxel1_fn)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
-                                   const float *rw, int rows, int nvec, float thr);
+/* splat_voxel: splat_voxel1, splat_voxel4, splat_voxel_gs */
 void vs_splat_voxel1_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                             int rows, int nvec, float thr);
 void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
@@ -218,54 +246,39 @@ void vs_splat_voxel4_scalar(float *const *dst, const float *w, int ns, ptrdiff_t
                             int rows, int nvec, float thr);
 void vs_splat_voxel4_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                           int rows, int nvec, float thr);
-typedef void (*vs_splat_voxel_gs_fn)(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
-                                     const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr);
 void vs_splat_voxel_gs_scalar(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
                               const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr);
 void vs_splat_voxel_gs_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                             const float *dx, const float *dy, int rows, int nvec, float thr);
-typedef void (*vs_splat_rows_mix_fn)(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
-                                     const float *dy, int rows, int nvec, float thr, const float m[12]);
-void vs_splat_rows_mix_scalar(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
-                              const float *dy, int rows, int nvec, float thr, const float m[12]);
-void vs_splat_rows_mix_avx2(float *dst, ptrdiff_t ds, const float *cw, const float *rw, const float *dx,
-                            const float *dy, int rows, int nvec, float thr, const float m[12]);
-typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
+
+/* place: place_voxels */
+unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
+
+/* project: project_brick */
 int vs_project_brick_scalar(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx2(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 int vs_project_brick_avx512(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 
-/* The per-ISA versions in simd/ (declared once here for the dispatch, the
- * tests and the kernel benchmark; call them only where the CPU has the ISA). */
-void vs_splat_row4_sse4(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_sse4(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx2(float *row4, const float *ex, const float w[4], int n);
-void vs_splat_row_gs_avx2(float *row4, const float *ex, const float *exd, const float c[4], int n);
-void vs_splat_row4_avx512(float *row4, const float *ex, const float w[4], int n);
-typedef void (*vs_splat_block_fn)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                                  const float w8[8]);
-void vs_splat_block_sse4(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx2(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                         const float w8[8]);
-void vs_splat_block_avx512(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
-                           const float w8[8]);
-typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
-typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const float *qp, const float *qn,
-                                  ptrdiff_t stride, int n, const vs_shade_tabs *T);
-typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
-typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
-                                const vs_shade_tabs *T);
-/* post-shaded sheet kernels: AVX2 only (AVX-512 versions were slower in the
- * frame, simd/README.md) */
-int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
+/* classify: classify_cd, classify_gs */
+void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
+                           ptrdiff_t stride, int n, const vs_shade_tabs *T);
 void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                          int n, const vs_shade_tabs *T);
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+
+/* shade: shade_lut */
+void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 
+/* composite */
+int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);
+int vs_composite_avx2(float *acc, const float *alpha, const float *rgb, int n, float thr);
+
 /* Fill the table: scalar, then the best ISA <= cap this CPU supports
- * (simd/dispatch.c). */
+ * (dispatch.c). */
 void vs_kernels_init(vs_kernels *k, vs_isa cap);
 /* The ISA cap from VSPLAT_ISA (VS_ISA_AUTO if unset or unknown). */
 vs_isa vs_isa_from_env(void);

@@ -1,6 +1,6 @@
 /* Voxel transform and binning, AVX-512: sixteen voxels a step, multiply
- * then add in the scalar reference's order (src/kernels.c; no FMA,
- * src/kernels.h); the kept lanes are packed by register compresses and the
+ * then add in the scalar reference's order (scalar.c; no FMA,
+ * kernels.h); the kept lanes are packed by register compresses and the
  * positions interleaved into x, y, z triples through a small buffer. */
 #include "kernels.h"
 

@@ -1,7 +1,7 @@
 /* One density voxel into all its sheets, AVX-512: two 8-pixel vectors of a
  * footprint row per register (an odd last one in a 256-bit register), built
  * once and added to every sheet; multiply then add as the scalar reference
- * (src/kernels.c; no FMA, src/kernels.h).  One-vector rows stay 256-bit. */
+ * (scalar.c; no FMA, kernels.h).  One-vector rows stay 256-bit. */
 #include "kernels.h"
 
 #include <immintrin.h>

@@ -1,4 +1,4 @@
-/* AVX2 front-to-back compositing (src/kernels.h `composite`), 8 pixels a
+/* AVX2 front-to-back compositing (kernels.h `composite`), 8 pixels a
  * step, bit-identical to the scalar reference: the accumulators (4 floats a
  * pixel) are transposed to one vector per channel, the colours (3 a pixel)
  * de-interleaved, and pixels with alpha <= 0 (or NaN) keep their

@@ -1,0 +1,102 @@
+/* AVX2 classification of a sheet's pixels (kernels.h classify_cd,
+ * classify_gs), 8 pixels a step, bit-identical to scalar.c: the opacity
+ * table's coordinate in double as the reference, truncation by cvtt, one
+ * multiply and one add per element, IEEE division.  Tails go to the
+ * scalar reference or to masked loads and stores (pixels are
+ * independent). */
+#include "kernels.h"
+#include "tab_coord-avx2.h"
+
+#include <immintrin.h>
+
+/* (x, y, z) per lane -> x0 y0 z0 x1 ... z7 in three vectors */
+static inline void store3(float *p, __m256 x, __m256 y, __m256 z)
+{
+    const __m256i i0 = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
+    const __m256i i1 = _mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5);
+    const __m256i i2 = _mm256_setr_epi32(5, 5, 6, 6, 6, 7, 7, 7);
+    __m256 o0 = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(x, i0), _mm256_permutevar8x32_ps(y, i0), 0x92),
+                                _mm256_permutevar8x32_ps(z, i0), 0x24);
+    __m256 o1 = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(x, i1), _mm256_permutevar8x32_ps(y, i1), 0x24),
+                                _mm256_permutevar8x32_ps(z, i1), 0x49);
+    __m256 o2 = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(x, i2), _mm256_permutevar8x32_ps(y, i2), 0x49),
+                                _mm256_permutevar8x32_ps(z, i2), 0x92);
+    _mm256_storeu_ps(p, o0);
+    _mm256_storeu_ps(p + 8, o1);
+    _mm256_storeu_ps(p + 16, o2);
+}
+
+/* the opacity table at v (as lookup_alpha in scalar.c) */
+static inline __m256 lookup_alpha8(const vs_shade_tabs *T, __m256 v)
+{
+    const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
+    __m256 x = tab_coord8(v, _mm256_set1_pd(T->vmin), _mm256_set1_pd(T->scale));
+    __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
+    x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
+    __m256i j = _mm256_cvttps_epi32(x);
+    __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(j));
+    __m256 t0 = _mm256_i32gather_ps(T->alpha, j, 4), t1 = _mm256_i32gather_ps(T->alpha + 1, j, 4);
+    return _mm256_blendv_ps(_mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0))),
+                            _mm256_set1_ps(T->alpha[VS_KTAB - 1]), top);
+}
+
+/* lanes [0, k) set */
+static inline __m256i prefix8(int k)
+{
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(k), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+}
+
+/* 8 pixels, or the first m of them (masked loads and stores: no access
+ * past the span) */
+static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                             int m, const vs_shade_tabs *T)
+{
+    const __m256 half = _mm256_set1_ps(0.5f), two_slab = _mm256_set1_ps(T->two_slab);
+    const __m256i in = prefix8(m);
+#define LD(p) (m == 8 ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in))
+    __m256 a = lookup_alpha8(T, LD(q));
+    __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
+    __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
+    __m256 gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
+#undef LD
+    if (m == 8) {
+        _mm256_storeu_ps(alpha, a);
+        store3(g, gx, gy, gz);
+    } else {
+        float tmp[24];
+        _mm256_maskstore_ps(alpha, in, a);
+        store3(tmp, gx, gy, gz);
+        for (int k = 0; k < 3; k++) _mm256_maskstore_ps(g + 8 * k, prefix8(3 * m - 8 * k), _mm256_loadu_ps(tmp + 8 * k));
+    }
+}
+
+void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
+                         int n, const vs_shade_tabs *T)
+{
+    int i = 0;
+    for (; i + 8 <= n; i += 8) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, 8, T);
+    if (i < n) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, n - i, T);
+}
+
+/* post-gs: (density, gx, gy, gz) per pixel, transposed to one vector per
+ * channel (pixel order 0 2 4 6 1 3 5 7, put back by one permute each) */
+void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+{
+    const __m256i back = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    const __m256 slab = _mm256_set1_ps(T->slab);
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        const float *p = q4 + 4 * i;
+        __m256 r0 = _mm256_loadu_ps(p), r1 = _mm256_loadu_ps(p + 8), r2 = _mm256_loadu_ps(p + 16),
+               r3 = _mm256_loadu_ps(p + 24);
+        __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+        __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+        __m256 d = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t0, t2, 0x44), back);
+        __m256 gx = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t0, t2, 0xee), back);
+        __m256 gy = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t1, t3, 0x44), back);
+        __m256 gz = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t1, t3, 0xee), back);
+        _mm256_storeu_ps(alpha + i, lookup_alpha8(T, d));
+        store3(g + 3 * i, _mm256_div_ps(gx, slab), _mm256_div_ps(gy, slab), _mm256_div_ps(gz, slab));
+    }
+    if (i < n) vs_classify_gs_scalar(alpha + i, g + 3 * i, q4 + 4 * i, n - i, T);
+}
