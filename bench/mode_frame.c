@@ -6,7 +6,8 @@
  * that render's whole wall clock (rebuild + frame, what a user waits for;
  * stderr splits it); peak_mb is getrusage's ru_maxrss.  Every `vsplat render`
  * option works (the CLI's parser, tools/cli_args.c, linked as the
- * vsplat_cli_args library); -o OUT, if given, receives the first frame.
+ * vsplat_cli_args library); -o OUT, if given, receives the first frame;
+ * --trace FILE.json receives the timeline of the timed frames.
  * stdout gets exactly one line:
  *   median_ms=... min_ms=... max_ms=... iso_change_ms=... peak_mb=... */
 #include "bench.h"
@@ -99,6 +100,12 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
     fprintf(stderr, "frame: first render %.1f ms (relevant-voxel list %.1f ms, %llu relevant voxels), %d threads\n",
             first.ms_total, first.ms_relevant, (unsigned long long)first.voxels_relevant, first.threads);
 
+    /* --trace FILE.json: the timed frames (and the iso change) as a timeline */
+    vs_trace *trace = NULL;
+    if (o.trace_path) {
+        if (vs_trace_create(&trace) != VS_OK) return 2;
+        s.trace = trace;
+    }
     double *ms = malloc((size_t)frames * sizeof *ms);
     if (!ms) return 2;
     int rebuilt = 0;
@@ -151,6 +158,15 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
     double peak_mb = ru.ru_maxrss / 1024.0; /* kilobytes on Linux */
     printf("median_ms=%.2f min_ms=%.2f max_ms=%.2f iso_change_ms=%.2f peak_mb=%.1f\n", med, ms[0], ms[frames - 1],
            iso_change, peak_mb);
+    if (trace) {
+        if (vs_trace_write(ctx, trace, o.trace_path) != VS_OK) {
+            fprintf(stderr, "vsplat-bench: %s\n", vs_last_error(ctx));
+            st = VS_ERR_IO;
+        } else {
+            fprintf(stderr, "frame: wrote %s (%zu spans)\n", o.trace_path, vs_trace_spans(trace));
+        }
+        vs_trace_release(trace);
+    }
     free(ms);
     vs_volume_release(vol);
     vs_context_release(ctx);
