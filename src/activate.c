@@ -369,6 +369,9 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                                                                   void (*weights8)(const float *, float, float,
                                                                                    const vs_footprint *, float *))
 {
+    /* the counts in locals, added to the worker's once per sheet: a store
+     * through ts->ws per voxel would make the compiler reload ts's fields */
+    uint64_t n_culled = 0, n_tested = 0, n_splatted = 0, n_vec = 0;
     const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
     const vs_block_geom *g = F->sheared_blocks ? &F->skew : &F->blk;
@@ -415,8 +418,8 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                 if (v + plane < nvox) __builtin_prefetch(vdata + (v + plane) * vsize);
             }
         unsigned live = F->kern.place_voxels(&bk->p[i0].x, (int)(sizeof(pend) / sizeof(float)), nb, &P, &pv);
-        ts->ws->culled += (uint64_t)(nb - __builtin_popcount(live));
-        if (P.sat) ts->ws->tested += (uint64_t)nb;
+        n_culled += (uint64_t)(nb - __builtin_popcount(live));
+        if (P.sat) n_tested += (uint64_t)nb;
         /* the splat weights of the batch's live voxels first: pre-shaded
          * ones read the shading tables at random (cache misses), which one
          * voxel at a time waited for between footprint adds */
@@ -436,7 +439,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                 for (int k = opening; k <= kl; k++) {
                     section sec;
                     if (!make_section(t, &unscaled, e->x, e->y, e->z, k, &sec)) continue;
-                    ts->ws->splatted++;
+                    n_splatted++;
                     const int slot = slots[k - opening];
                     vs_raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot], &uc);
                 }
@@ -466,8 +469,8 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                                    .roww = P.colw ? pv.rw[lane] + j0 : NULL};
             const int ns = splat_voxel(&job);
             if (ns >= 0) {
-                ts->ws->splatted += (uint64_t)ns;
-                ts->ws->floats += 8 * (uint64_t)ns * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
+                n_splatted += (uint64_t)ns;
+                n_vec += (uint64_t)ns * (uint64_t)((j1 - j0) * (v1 - v0));
                 continue;
             }
             /* a block too wide for the voxel kernels: built in memory once
@@ -480,16 +483,21 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
             for (int k = opening; k <= kl; k++) {
                 const float D = pv.D[k - opening][lane];
                 if (!(D > 0.0f)) continue;
-                ts->ws->splatted++;
+                n_splatted++;
                 const int slot = slots[k - opening];
                 float w8[8];
                 weights8(job.wv, D, st->gradient_splats ? pv.E[k - opening][lane] : 0.0f, &F->fp, w8);
                 F->kern.splat_block(ring[slot] + job.off, job.ds, src, bs, j1 - j0, v1 - v0, w8);
-                ts->ws->floats += 8 * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
+                n_vec += (uint64_t)((j1 - j0) * (v1 - v0));
                 rect_merge(&bbs[slot], &job.box);
             }
         }
     }
+    vs_worker_stats *ws = ts->ws;
+    ws->culled += n_culled;
+    ws->tested += n_tested;
+    ws->splatted += n_splatted;
+    ws->floats += 8 * n_vec; /* 8-float vectors */
     retire_bucket(ts, bk);
 }
 

@@ -352,7 +352,7 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_NO_OCCL: s->occlusion = 0; return 0;
     case O_OCCL_T: return parse_range_double(n, v, 0.0, 1.0, 1, &s->occlusion_threshold, err, cap);
     case O_NO_TILES: s->tile_counters = 0; return 0;
-    case O_TILE_SIZE: return parse_range_int(n, v, 4, 4096, &s->tile_size, err, cap);
+    case O_TILE_SIZE: return parse_range_int(n, v, 8, 4096, &s->tile_size, err, cap);
     case O_EXACT_N: s->exact_normals = 1; return 0;
     case O_NORMAL_LUT: return parse_range_int(n, v, 8, 65536, &s->normal_lut_size, err, cap);
     case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
@@ -592,7 +592,7 @@ void cli_render_usage(FILE *f)
             "  --no-occlusion         no early splat elimination\n"
             "  --occlusion-threshold T  opacity above which a pixel is occluded (default 0.995)\n"
             "  --no-tiles             no tile counters: shade every tile of every sheet\n"
-            "  --tile-size N          tile edge in pixels, 4..4096 (default 64)\n"
+            "  --tile-size N          tile edge in pixels, 8..4096 (default 64)\n"
             "  --exact-normals        exact normalization instead of the Clyne-Dennis LUT\n"
             "  --normal-lut N         angle bins of the shading table (default 256)\n"
             "lighting (one directional light, Phong):\n"
