@@ -3,7 +3,8 @@
  * One concern per file: timing.c (the harness: shared contexts, warm-up,
  * interleaved runs, medians, progress), data.c (where the volumes are and how
  * each bench input is loaded), results.c (results folder, CSV, printing
- * helpers), plot.c (gnuplot), and one file per mode (mode_*.c). */
+ * helpers), plot.c (gnuplot), roof.c, roof-ISA.c and counters.c (the machine's
+ * limits, roof.h), and one file per mode (mode_*.c). */
 #ifndef VSPLAT_BENCH_H
 #define VSPLAT_BENCH_H
 
@@ -105,6 +106,7 @@ int bench_error(const bench_opts *o);
 int bench_scaling(const bench_opts *o);
 int bench_growth(const bench_opts *o);
 int bench_kernels(const bench_opts *o); /* mode_kernels.c: SIMD kernels per ISA */
+int bench_limits(const bench_opts *o);  /* mode_limits.c: each stage against the machine's limits */
 /* frame takes the render options of `vsplat render` (argv after "frame") */
 int bench_frame(const bench_opts *o, int argc, char **argv);
 

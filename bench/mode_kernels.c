@@ -6,6 +6,7 @@
  * rasterize stage of a real frame per ISA (interleaved runs, medians). */
 #include "bench.h"
 #include "kernels.h"
+#include "roof.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -195,28 +196,6 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
     return best * 1e6 / ((double)reps * elems);
 }
 
-/* Peak single-precision FMA rate: 10 independent 8-wide chains. */
-__attribute__((target("avx2,fma"))) static double peak_fma_gflops(void)
-{
-    typedef float v8 __attribute__((vector_size(32)));
-    v8 a[10], m = {1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f, 1.0000001f},
-              c = {1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f, 1e-7f};
-    for (int i = 0; i < 10; i++) a[i] = c * (float)i;
-    const long iters = 20000000;
-    double best = 1e30;
-    for (int trial = 0; trial < 3; trial++) {
-        double t0 = bench_now_ms();
-        for (long it = 0; it < iters; it++)
-            for (int i = 0; i < 10; i++) a[i] = __builtin_ia32_vfmaddps256(a[i], m, c);
-        double ms = bench_now_ms() - t0;
-        if (ms < best) best = ms;
-    }
-    float sink = 0;
-    for (int i = 0; i < 10; i++) sink += a[i][0];
-    if (sink == 12345.0f) printf(" ");
-    return (double)iters * 10 * 8 * 2 / (best * 1e6);
-}
-
 int bench_kernels(const bench_opts *o)
 {
     const vs_isa best = vs_isa_detect();
@@ -299,8 +278,8 @@ int bench_kernels(const bench_opts *o)
         printf("\n");
     }
     if (best >= VS_ISA_AVX2) {
-        double gf = peak_fma_gflops();
-        printf("peak FMA rate (AVX2, 10 chains): %.1f GFLOP/s per core; a row1 element is 2 flops\n", gf);
+        double gf = bench_peak_gflops(VS_ISA_AVX2, 1, o->quick);
+        printf("peak FMA rate (AVX2, %d chains): %.1f GFLOP/s per core; a row1 element is 2 flops\n", ROOF_CHAINS, gf);
         if (csv) fprintf(csv, "peak_fma_gflops,avx2,0,%.2f,0\n", gf);
     }
     if (csv) fclose(csv);

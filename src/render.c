@@ -205,9 +205,10 @@ static vs_tile_scratch *ensure_scratch(vs_context *ctx, int nthreads)
 /* The bytes each stage reads and writes by construction, from the work
  * counts: rasterization reads and writes every footprint float it adds;
  * classification reads a pixel's channels (post-cd: of three sheets) and
- * writes its opacity and gradient; shading reads gradient, opacity and
- * the pixel's density or colour and writes a colour; compositing reads the
- * accumulator, opacity and colour and writes the accumulator. */
+ * writes its opacity and gradient; shading reads every classified pixel's
+ * opacity and, where it is not 0, the gradient and the pixel's density or
+ * colour, and writes a colour; compositing reads the accumulator, opacity
+ * and colour and writes the accumulator. */
 static void stage_bytes(const vs_frame *F, vs_stats *st)
 {
     const uint64_t ch = (uint64_t)F->stages->ch, sheets_read = F->stages->ahead ? 3 : 1;
@@ -216,7 +217,7 @@ static void stage_bytes(const vs_frame *F, vs_stats *st)
     st->bytes_written.rasterize = 4 * st->footprint_floats;
     st->bytes_read.gradient = 4 * ch * sheets_read * px;
     st->bytes_written.gradient = 16 * px;
-    st->bytes_read.shade = (16 + 4 * ch) * vis;
+    st->bytes_read.shade = 4 * px + (12 + 4 * ch) * vis;
     st->bytes_written.shade = 12 * vis;
     st->bytes_read.composite = 32 * px;
     st->bytes_written.composite = 16 * vis;
