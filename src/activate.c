@@ -167,14 +167,23 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         if (ts->nactive == ts->cap_active) {
             int cap = ts->cap_active ? 2 * ts->cap_active : 1024;
             pend **na = realloc(ts->active, (size_t)cap * sizeof *na);
-            if (na) ts->active = na;
-            float(*nb)[5] = persp && na ? realloc(ts->abox, (size_t)cap * sizeof *nb) : NULL;
-            if (nb) ts->abox = nb;
-            if (!na || (persp && !nb)) {
+            if (!na) {
                 ts->failed = 1;
                 return;
             }
+            ts->active = na;
             ts->cap_active = cap;
+        }
+        /* the boxes have their own capacity: the lists outlive the frame
+         * (vs_tile_scratch), and an orthographic frame grows only `active` */
+        if (persp && ts->cap_abox < ts->cap_active) {
+            float(*nb)[5] = realloc(ts->abox, (size_t)ts->cap_active * sizeof *nb);
+            if (!nb) {
+                ts->failed = 1;
+                return;
+            }
+            ts->abox = nb;
+            ts->cap_abox = ts->cap_active;
         }
         const pend *e = &bk->p[i];
         if (persp) /* the box of its sections over all its sheets */

@@ -203,23 +203,38 @@ static vs_tile_scratch *ensure_scratch(vs_context *ctx, int nthreads)
 }
 
 /* The bytes each stage reads and writes by construction, from the work
- * counts: rasterization reads and writes every footprint float it adds;
- * classification reads a pixel's channels (post-cd: of three sheets) and
- * writes its opacity and gradient; shading reads every classified pixel's
- * opacity and, where it is not 0, the gradient and the pixel's density or
- * colour, and writes a colour; compositing reads the accumulator, opacity
- * and colour and writes the accumulator. */
+ * counts (px: pixels classified, vis: of those with opacity):
+ *   rasterize   every footprint float added is read and written;
+ *   gradient    post-cd reads the density of three sheets and writes opacity
+ *               and gradient (16 B); post-gs reads its four channels and
+ *               writes the same; pre and post-alpha read one channel and
+ *               write the opacity;
+ *   shade       reads every pixel's opacity and, where it is not 0, the
+ *               gradient and density (post) or the splatted colour (pre,
+ *               post-alpha), and writes a colour (pre: and the opacity);
+ *   composite   reads every pixel's opacity and, where it is not 0, the
+ *               accumulator and colour, and writes the accumulator. */
 static void stage_bytes(const vs_frame *F, vs_stats *st)
 {
-    const uint64_t ch = (uint64_t)F->stages->ch, sheets_read = F->stages->ahead ? 3 : 1;
     const uint64_t px = st->pixels_classified, vis = st->pixels_shaded;
     st->bytes_read.rasterize = 4 * st->footprint_floats;
     st->bytes_written.rasterize = 4 * st->footprint_floats;
-    st->bytes_read.gradient = 4 * ch * sheets_read * px;
-    st->bytes_written.gradient = 16 * px;
-    st->bytes_read.shade = 4 * px + (12 + 4 * ch) * vis;
-    st->bytes_written.shade = 12 * vis;
-    st->bytes_read.composite = 32 * px;
+    switch (F->pipeline) {
+    case VS_PIPELINE_POST_CD:
+    case VS_PIPELINE_POST_GS:
+        st->bytes_read.gradient = (F->pipeline == VS_PIPELINE_POST_CD ? 12 : 16) * px;
+        st->bytes_written.gradient = 16 * px;
+        st->bytes_read.shade = 4 * px + 16 * vis;
+        st->bytes_written.shade = 12 * vis;
+        break;
+    default: /* pre-shaded */
+        st->bytes_read.gradient = 4 * px;
+        st->bytes_written.gradient = 4 * px;
+        st->bytes_read.shade = 4 * px + 12 * vis;
+        st->bytes_written.shade = (F->pipeline == VS_PIPELINE_PRE ? 16 : 12) * vis;
+        break;
+    }
+    st->bytes_read.composite = 4 * px + 28 * vis;
     st->bytes_written.composite = 16 * vis;
 }
 

@@ -54,7 +54,9 @@ static size_t take(carve *c, size_t bytes)
  * out of memory. */
 static int scratch_reserve(vs_tile_scratch *s, size_t bytes, size_t zero)
 {
-    if (bytes > s->cap) {
+    /* grown on demand; given back when a large arena is four times what a
+     * tile needs (a frame with huge tiles is not paid for ever after) */
+    if (bytes > s->cap || (s->cap > ((size_t)64 << 20) && bytes < s->cap / 4)) {
         const size_t cap = bytes + bytes / 4;
         free(s->arena);
         s->arena = aligned_alloc(64, (cap + 63) & ~(size_t)63);
@@ -215,6 +217,7 @@ void vs_tile_render(void *arg, int worker, int task)
     ts.active = scr->active;
     ts.abox = scr->abox;
     ts.cap_active = scr->cap_active;
+    ts.cap_abox = scr->cap_abox;
     scr->spare = NULL;
     scr->spare_cap = 0;
     for (int y = 0; y < t.th; y++) {
@@ -295,8 +298,8 @@ void vs_tile_render(void *arg, int worker, int task)
             /* 1. classification + gradients */
             const double t0 = vs_now_ms();
             st->classify(&t, &sv, sb);
-            const double t1 = vs_now_ms();
             count_pixels(&t, &sp, sb.alpha, ws);
+            const double t1 = vs_now_ms();
             /* 2. shading: colour per pixel */
             st->shade(&t, &sv, sb);
             const double t2 = vs_now_ms();
@@ -339,6 +342,7 @@ void vs_tile_render(void *arg, int worker, int task)
     scr->active = ts.active;
     scr->abox = ts.abox;
     scr->cap_active = ts.cap_active;
+    scr->cap_abox = ts.cap_abox;
     if (tr) vs_span_add(tr, VS_SPAN_TILE, worker, task, t_tile, vs_now_ms());
     atomic_fetch_add(&F->tiles_done, 1);
 }

@@ -103,7 +103,7 @@ typedef struct tile_state {
     pend **active;    /* sheet-at-a-time path: voxels overlapping the sheet */
     float (*abox)[5]; /* perspective: each active voxel's voxel_box (box
                          and scale), computed once, when it is admitted */
-    int nactive, cap_active;
+    int nactive, cap_active, cap_abox;
     const float *acc; /* the tile's accumulation (occlusion map = alpha)   */
     const int *sat;   /* summed-area table of opaque pixels                */
     const int *opaque;
@@ -125,7 +125,7 @@ typedef struct vs_tile_scratch {
     int spare_cap;
     pend **active;   /* sheet-at-a-time path */
     float (*abox)[5];
-    int cap_active;
+    int cap_active, cap_abox;
 } vs_tile_scratch;
 
 /* Per-pixel scratch of one sheet: opacity, gradient/colour. */

@@ -38,7 +38,7 @@ typedef struct vs_span {
 
 /* A growable list of spans (one per worker during a frame). */
 typedef struct vs_span_buf {
-    vs_span *s;
+    _Alignas(64) vs_span *s; /* own cache line: workers append at once */
     size_t n, cap;
     int failed; /* out of memory: spans were dropped */
 } vs_span_buf;
