@@ -71,6 +71,12 @@ expect_fail 1 "--ramp -1" render "${SCENE[@]}" --ramp -1 -o a.png
 expect_fail 1 "--opacity 2" render "${SCENE[@]}" --opacity 2 -o a.png
 expect_fail 1 "--threads -1" render "${SCENE[@]}" --threads -1 -o a.png
 expect_fail 1 "--threads 2.5" render "${SCENE[@]}" --threads 2.5 -o a.png
+expect_fail 1 "--threads 1000" render "${SCENE[@]}" --threads 1000 -o a.png
+expect_err "--threads" "too many threads names the option"
+expect_fail 1 "--tile-size 4" render "${SCENE[@]}" --tile-size 4 -o a.png
+expect_err "--tile-size" "a tile size below 8 names the option"
+expect_fail 1 "--trace = output" render "${SCENE[@]}" --trace a.png -o a.png
+expect_err "--trace" "a trace over the output image names the option"
 expect_fail 1 "--isa mmx" render "${SCENE[@]}" --isa mmx -o a.png
 expect_fail 1 "--view 1" render "${SCENE[@]}" --view 1 -o a.png
 expect_fail 1 "--view 0,100" render "${SCENE[@]}" --view 0,100 -o a.png

@@ -343,7 +343,7 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
             return 0;
         }
         return parse_range_int(n, v, -1, 16, &s->seam, err, cap);
-    case O_THREADS: return parse_range_int(n, v, 0, 4096, &s->threads, err, cap);
+    case O_THREADS: return parse_range_int(n, v, 0, 256, &s->threads, err, cap);
     case O_ISA:
         if (vs_isa_parse(v, &s->isa) != VS_OK)
             return fail(err, cap, "--isa: expected auto, scalar, sse4, avx2 or avx512, got '%s'", v);
@@ -400,8 +400,8 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
 static int env_defaults(vs_settings *s, char *err, size_t cap)
 {
     const char *t = getenv("VSPLAT_THREADS");
-    if (t && *t && !to_int(t, 0, 4096, &s->threads))
-        return fail(err, cap, "VSPLAT_THREADS: expected an integer in 0..4096, got '%s'", t);
+    if (t && *t && !to_int(t, 0, 256, &s->threads))
+        return fail(err, cap, "VSPLAT_THREADS: expected an integer in 0..256, got '%s'", t);
     const char *i = getenv("VSPLAT_ISA");
     if (i && *i && vs_isa_parse(i, &s->isa) != VS_OK)
         return fail(err, cap, "VSPLAT_ISA: expected auto, scalar, sse4, avx2 or avx512, got '%s'", i);
@@ -603,7 +603,7 @@ void cli_render_usage(FILE *f)
             "  --trilinear            trilinear instead of exact Gaussian reconstruction\n"
             "  --no-analytic          sample the voxels even if the scene is analytic\n"
             "execution:\n"
-            "  --threads N            worker threads, 0 = one per core (default $VSPLAT_THREADS or 0)\n"
+            "  --threads N            worker threads, 0..256, 0 = one per core (default $VSPLAT_THREADS or 0)\n"
             "  --isa I                auto | scalar | sse4 | avx2 | avx512 (default $VSPLAT_ISA or auto)\n"
             "  --no-pin               do not bind workers to cores\n"
             "  --help                 this text\n");
