@@ -13,6 +13,7 @@ PACKAGES=(
     libhwloc-dev libteem-dev libnifti2-dev zlib1g-dev
     libcjson-dev  # ParaView colour-map presets (--tf FILE.json)
     mricron-data  # the Colin27 demo head (ch2.nii.gz)
+    libvolpack1-dev  # vsplat-bench peers: VolPack's octree renderer
     gnuplot-nox jq  # plots; tools/trace-png.sh reads traces with jq
     clang libclang-rt-14-dev valgrind  # sanitizers, fuzzers, memcheck
 )
