@@ -2,6 +2,10 @@
  * and the spans still open. */
 #include "occlusion.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 /* Early splat elimination.  The paper tests the occlusion map at the
  * projected voxel centre; culling a voxel whose centre is covered but whose
  * footprint still reaches open pixels removes density from their sheets and
@@ -32,16 +36,51 @@ void vs_build_sat(const tile_ctx *t, const float *acc, float thr, int *sat, int 
  * shading: behind the head's skin, four in five visible pixels of a
  * shaded span are such.  Clearing their opacity skips them in shading and
  * compositing and leaves the image bit-identical. */
-void vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, float *alpha)
+uint64_t vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, float *alpha)
 {
+    uint64_t vis = 0;
     for (int y = r->y0; y < r->y1; y++) {
         if (r->xa[y] == r->xb[y]) continue;
         const int o = (y - 1) * t->tw + (r->xa[y] - 1);
-        const float *a = acc + 4 * o + 3;
-        float *al = alpha + o;
+        const float *restrict a = acc + 4 * o + 3;
+        float *restrict al = alpha + o;
         const int n = r->xb[y] - r->xa[y];
-        for (int i = 0; i < n; i++) al[i] = a[4 * i] >= 1.0f ? 0.0f : al[i]; /* a select: vectorises */
+        int v = 0, i = 0;
+#if defined(__SSE2__)
+        /* four pixels a step: GCC does not vectorise the strided opacity
+         * load, and this pass runs over every classified pixel */
+        const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+        for (; i + 4 <= n; i += 4) {
+            const __m128 a01 = _mm_shuffle_ps(_mm_loadu_ps(a + 4 * i - 3), _mm_loadu_ps(a + 4 * i + 1),
+                                              _MM_SHUFFLE(3, 3, 3, 3)); /* a0 a0 a1 a1 */
+            const __m128 a23 = _mm_shuffle_ps(_mm_loadu_ps(a + 4 * i + 5), _mm_loadu_ps(a + 4 * i + 9),
+                                              _MM_SHUFFLE(3, 3, 3, 3));
+            const __m128 op = _mm_shuffle_ps(a01, a23, _MM_SHUFFLE(2, 0, 2, 0)); /* a0 a1 a2 a3 */
+            const __m128 x = _mm_andnot_ps(_mm_cmpge_ps(op, one), _mm_loadu_ps(al + i));
+            _mm_storeu_ps(al + i, x);
+            v += __builtin_popcount((unsigned)_mm_movemask_ps(_mm_cmpgt_ps(x, zero)));
+        }
+#endif
+        for (; i < n; i++) {
+            const float x = a[4 * i] >= 1.0f ? 0.0f : al[i];
+            al[i] = x;
+            v += x > 0.0f;
+        }
+        vis += (uint64_t)v;
     }
+    return vis;
+}
+
+uint64_t vs_count_visible(const tile_ctx *t, const spans *r, const float *alpha)
+{
+    uint64_t vis = 0;
+    for (int y = r->y0; y < r->y1; y++) {
+        const float *al = alpha + (y - 1) * t->tw + (r->xa[y] - 1);
+        int v = 0;
+        for (int i = 0; i < r->xb[y] - r->xa[y]; i++) v += al[i] > 0.0f;
+        vis += (uint64_t)v;
+    }
+    return vis;
 }
 
 /* The part of the touched rectangle r that is classified, shaded and

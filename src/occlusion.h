@@ -36,8 +36,11 @@ static inline int box_occluded(const tile_ctx *t, const int *sat, float x0, floa
 /* Rebuild the summed-area table from tile row `from` on (rows above keep
  * their sums). */
 void vs_build_sat(const tile_ctx *t, const float *acc, float thr, int *sat, int from);
-/* Clear the opacity of span pixels already fully opaque. */
-void vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, float *alpha);
+/* Clear the opacity of span pixels already fully opaque; returns how many
+ * span pixels keep an opacity (the work count of shading). */
+uint64_t vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, float *alpha);
+/* The same count without occlusion. */
+uint64_t vs_count_visible(const tile_ctx *t, const spans *r, const float *alpha);
 /* The part of the touched rectangle r to classify, shade and composite. */
 void vs_shaded_spans(const rect *r, const int *live0, const int *live1, spans *sp);
 /* Shrink own row y's live columns past pixels that became opaque. */

@@ -65,16 +65,16 @@ static void perspective_gradients(const tile_ctx *t, int k, const spans *r, cons
 }
 
 /* What every pipeline does after its own classification. */
-static inline void classify_finish(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+static inline uint64_t classify_finish(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
     if (F->clip_to_volume) clip_outside(t, sv->k, sv->sp, sb.alpha);
-    if (F->s->occlusion) vs_skip_opaque(t, sv->sp, sv->acc, sb.alpha);
+    return F->s->occlusion ? vs_skip_opaque(t, sv->sp, sv->acc, sb.alpha) : vs_count_visible(t, sv->sp, sb.alpha);
 }
 
 /* Post-cd: density classified, (FH)D central differences across the
  * sheets before and after. */
-void vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
     const spans *sp = sv->sp;
@@ -87,11 +87,11 @@ void vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     }
     if (F->clip_to_volume) clip_outside(t, sv->k, sp, sb.alpha);
     if (F->cam.persp) perspective_gradients(t, sv->k, sp, sb.alpha, sb.g);
-    if (F->s->occlusion) vs_skip_opaque(t, sp, sv->acc, sb.alpha);
+    return F->s->occlusion ? vs_skip_opaque(t, sp, sv->acc, sb.alpha) : vs_count_visible(t, sp, sb.alpha);
 }
 
 /* Post-gs: density classified, the gradient splatted with it. */
-void vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+uint64_t vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
     const spans *sp = sv->sp;
@@ -101,11 +101,11 @@ void vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, sv->q + 4 * b, sp->xb[y] - sp->xa[y], sv->tabs);
     }
-    classify_finish(t, sv, sb);
+    return classify_finish(t, sv, sb);
 }
 
 /* Pre: the splatted opacity. */
-void vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+uint64_t vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const spans *sp = sv->sp;
     for (int y = sp->y0; y < sp->y1; y++)
@@ -114,11 +114,11 @@ void vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             size_t b = (size_t)y * t->stride + x;
             sb.alpha[o] = sv->q[4 * b + 3];
         }
-    classify_finish(t, sv, sb);
+    return classify_finish(t, sv, sb);
 }
 
 /* Post-alpha: the splatted density classified, corrected for the slab. */
-void vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
     const spans *sp = sv->sp;
@@ -128,5 +128,5 @@ void vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf s
             size_t b = (size_t)y * t->stride + x;
             sb.alpha[o] = lookup_corr(F, F->alpha_corr, sv->q[4 * b + 3]);
         }
-    classify_finish(t, sv, sb);
+    return classify_finish(t, sv, sb);
 }

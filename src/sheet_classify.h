@@ -6,9 +6,10 @@
 
 #include "tile.h"
 
-void vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
-void vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
-void vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
-void vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+/* Each returns how many span pixels keep an opacity. */
+uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+uint64_t vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+uint64_t vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 
 #endif

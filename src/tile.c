@@ -69,24 +69,6 @@ static int scratch_reserve(vs_tile_scratch *s, size_t bytes, size_t zero)
     return 1;
 }
 
-/* Work counts of a sheet's classification: the span pixels, and those
- * with opacity (shaded and composited). */
-static void count_pixels(const tile_ctx *t, const spans *sp, const float *alpha, vs_worker_stats *ws)
-{
-    uint64_t n = 0, vis = 0;
-    for (int y = sp->y0; y < sp->y1; y++) {
-        const int w = sp->xb[y] - sp->xa[y];
-        if (w <= 0) continue;
-        const float *a = alpha + (y - 1) * t->tw + (sp->xa[y] - 1);
-        int v = 0;
-        for (int i = 0; i < w; i++) v += a[i] > 0.0f; /* vectorises */
-        n += (uint64_t)w;
-        vis += (uint64_t)v;
-    }
-    ws->px_classified += n;
-    ws->px_shaded += vis;
-}
-
 /* A bucket array no sheet reads again: the largest is kept for the next
  * tile's first bucket. */
 static void keep_or_free(vs_tile_scratch *s, pend *p, int cap)
@@ -199,7 +181,11 @@ void vs_tile_render(void *arg, int worker, int task)
     t.blk = nblk ? (float *)(A + o_blk) : NULL;
     t.ex = (float *)(A + o_ex);
     memset(acc, 0, (size_t)npix * 4 * sizeof(float));
-    memset(sb.g, 0, ((size_t)npix * 3 + 1) * sizeof(float));
+    /* sb.g needs no clearing: a pixel's colour is read only where its
+     * opacity is not 0, and then shading wrote it on this sheet; only the
+     * padding float the SIMD compositing reads past the last pixel is
+     * zeroed */
+    sb.g[(size_t)npix * 3] = 0.0f;
     memset(sat, 0, (size_t)(t.tw + 1) * (t.th + 1) * sizeof(int));
     memset(bucket, 0, ((size_t)span + 1) * sizeof(int));
 
@@ -297,9 +283,9 @@ void vs_tile_render(void *arg, int worker, int task)
                                    .tabs = &tabs, .acc = acc};
             /* 1. classification + gradients */
             const double t0 = vs_now_ms();
-            st->classify(&t, &sv, sb);
-            count_pixels(&t, &sp, sb.alpha, ws);
+            ws->px_shaded += st->classify(&t, &sv, sb);
             const double t1 = vs_now_ms();
+            for (int y = sp.y0; y < sp.y1; y++) ws->px_classified += (uint64_t)(sp.xb[y] - sp.xa[y]);
             /* 2. shading: colour per pixel */
             st->shade(&t, &sv, sb);
             const double t2 = vs_now_ms();

@@ -164,8 +164,9 @@ typedef struct vs_stages {
     /* voxel at a time: the voxels starting at sheet `opening` into every
      * sheet of the ring they reach (activate.h) */
     void (*activate)(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase);
-    /* classification and gradients of a sheet's spans into sb */
-    void (*classify)(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+    /* classification and gradients of a sheet's spans into sb; returns
+     * how many of its pixels keep an opacity */
+    uint64_t (*classify)(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
     /* shading: sb's gradients (or splatted colours) to colours */
     void (*shade)(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 } vs_stages;
