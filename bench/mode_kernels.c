@@ -1,5 +1,5 @@
 /* vsplat-bench kernels: one function at a time (like zstd's fullbench).
- * Every SIMD kernel of src/kernels/kernels.h against the scalar reference, on each
+ * Every SIMD kernel of simd/kernels.h against the scalar reference, on each
  * ISA this CPU has, at footprint-row lengths that occur in practice (a
  * footprint of radius 2 voxels spans ~9 pixels at 512^2 on a 181^3 head) and
  * longer ones; then the machine's measured peak FMA rate for scale; then the

@@ -1,5 +1,5 @@
 # Per-ISA compile flags only on the kernel files that need them, chosen by
-# the file name's suffix (src/kernels/FAMILY-sse4.c, -avx2.c, -avx512.c);
+# the file name's suffix (simd/FAMILY-sse4.c, -avx2.c, -avx512.c);
 # everything else, the scalar reference and the dispatch included, stays
 # baseline x86-64.
 function(vsplat_simd_flags)

@@ -30,7 +30,7 @@ static void voxel_box(const vs_frame *F, float x, float y, float z, float box[4]
 
 _Static_assert(VS_MAX_VSPAN <= VS_MAX_SHEETS_VOXEL, "the splat_voxel kernels take every sheet a kernel reaches");
 _Static_assert(VS_BRICK == 8 && VS_PROJECT_MAX >= VS_BRICK * VS_BRICK * VS_BRICK,
-               "project_brick (src/kernels/kernels.h) decodes 3-bit brick offsets of at most 512 voxels");
+               "project_brick (simd/kernels.h) decodes 3-bit brick offsets of at most 512 voxels");
 
 /* Room for one more voxel in a bucket (a new bucket takes the spare array
  * of an emptied one); 0 when out of memory. */

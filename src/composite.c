@@ -1,5 +1,5 @@
 /* Front-to-back compositing (composite.h); the kernel is the table's
- * `composite` (src/kernels/kernels.h). */
+ * `composite` (simd/kernels.h). */
 #include "composite.h"
 #include "finish.h"
 

@@ -153,7 +153,7 @@ static void perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
         }
 }
 
-/* Post-shaded, lookup tables: a kernel per span (src/kernels/kernels.h). */
+/* Post-shaded, lookup tables: a kernel per span (simd/kernels.h). */
 void vs_shade_post_lut(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;

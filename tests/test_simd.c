@@ -1,4 +1,4 @@
-/* Every SIMD kernel against the scalar reference (src/kernels/scalar.c) on every
+/* Every SIMD kernel against the scalar reference (simd/scalar.c) on every
  * ISA this CPU has: seeded random inputs, lengths 0 .. 3 x vector width + 1,
  * unaligned pointers, tails, zero and one weights.  Tolerance: none — the
  * kernels do one multiply and one add per element in the reference's order
