@@ -53,17 +53,10 @@ static int grow_bucket(tile_state *ts, pend_bucket *bk)
 /* A bucket no sheet reads again gives its array to the next new one. */
 static void retire_bucket(tile_state *ts, pend_bucket *bk)
 {
-    if (!ts->spare || ts->spare_cap < bk->cap) {
-        free(ts->spare);
-        ts->spare = bk->p;
-        ts->spare_cap = bk->cap;
-    } else {
-        free(bk->p);
-    }
+    vs_keep_spare(&ts->spare, &ts->spare_cap, bk->p, bk->cap);
     bk->p = NULL;
     bk->n = bk->cap = 0;
 }
-
 
 /* Open brick b: cull it whole if its footprints can only land on opaque
  * pixels, else project its voxels and bucket those that reach this tile. */
@@ -257,45 +250,42 @@ static inline int reached_sheets(const voxel_job *j, int nc, float **dst, float 
     return ns;
 }
 
-/* Density (post-cd): the block is built in registers and added to every
- * sheet in one kernel call. */
-static inline int splat_density(const voxel_job *j)
+/* Density (post-cd, nc 1) or colour and opacity, or colour and density
+ * (pre, post-alpha, nc 4): the block is built in registers and added to
+ * every sheet in one kernel call.  Inlined with nc constant. */
+static inline int splat_channels(const voxel_job *j, int nc)
 {
     const int v0 = j->v0, v1 = j->v1, j0 = j->j0, j1 = j->j1;
-    if (8 * (v1 - v0) > VS_VOXEL1_MAX) return -1;
-    const vs_block_geom *g = j->g;
-    float *dst[VS_MAX_VSPAN], w[VS_MAX_VSPAN];
-    float cwb[VS_VOXEL1_MAX + 8], rwb[VS_BLOCK_MAX_SPAN];
-    const float *cw = j->colw, *rw = j->roww;
-    const int ns = reached_sheets(j, 1, dst, w);
-    if (!cw) {
-        vs_block_factors(g, j->pl, j0, j1, v0, v1, cwb, rwb);
-        cw = cwb;
-        rw = rwb;
-    }
-    j->t->F->kern.splat_voxel1(dst, w, ns, j->ds, cw, rw, j1 - j0, v1 - v0, g->thr);
-    return ns;
-}
-
-/* Colour and opacity, or colour and density (pre, post-alpha): the same,
- * four channels. */
-static inline int splat_rgba(const voxel_job *j)
-{
-    const int v0 = j->v0, v1 = j->v1, j0 = j->j0, j1 = j->j1;
-    if (2 * (v1 - v0) > VS_VOXEL1_MAX) return -1;
+    if (8 / nc * (v1 - v0) > VS_VOXEL1_MAX) return -1;
     const vs_block_geom *g = j->g;
     float *dst[VS_MAX_VSPAN], w[4 * VS_MAX_VSPAN];
     float cwb[VS_VOXEL1_MAX + 8], rwb[VS_BLOCK_MAX_SPAN];
     const float *cw = j->colw, *rw = j->roww;
-    const int ns = reached_sheets(j, 4, dst, w);
+    const int ns = reached_sheets(j, nc, dst, w);
     if (!cw) {
         vs_block_factors(g, j->pl, j0, j1, v0, v1, cwb, rwb);
-        memset(cwb + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
+        if (nc == 4) memset(cwb + 2 * (v1 - v0), 0, 8 * sizeof(float)); /* read up to a multiple of 8 */
         cw = cwb;
         rw = rwb;
     }
-    j->t->F->kern.splat_voxel4(dst, w, ns, j->ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+    if (nc == 1)
+        j->t->F->kern.splat_voxel1(dst, w, ns, j->ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+    else
+        j->t->F->kern.splat_voxel4(dst, w, ns, j->ds, cw, rw, j1 - j0, v1 - v0, g->thr);
     return ns;
+}
+static inline int splat_density(const voxel_job *j) { return splat_channels(j, 1); }
+static inline int splat_rgba(const voxel_job *j) { return splat_channels(j, 4); }
+
+/* A sheet's gradient-splat weights (raster_gs's, per unit of the layout
+ * h, h dx, h dy, h): density, the x and y derivatives, the z one. */
+static inline void gradient_weights(const float *wv, float D, float E, float A, float rk, float w[4])
+{
+    const float wD = wv[0] * D;
+    w[0] = wD;
+    w[1] = -2.0f * wD * A;
+    w[2] = -2.0f * wD * rk;
+    w[3] = wv[0] * E;
 }
 
 /* Gradient splats (post-gs): the block's rows (h, h dx, h dy, h) built in
@@ -317,12 +307,8 @@ static inline int splat_gradient(const voxel_job *j)
         const float Dk = j->D[i * j->dstep];
         if (!(Dk > 0.0f)) continue;
         const int slot = j->slots[i];
-        const float wD = wv[0] * Dk;
         dst[ns] = j->ring[slot] + j->off;
-        w[4 * ns] = wD;
-        w[4 * ns + 1] = -2.0f * wD * A;
-        w[4 * ns + 2] = -2.0f * wD * rk;
-        w[4 * ns + 3] = wv[0] * j->E[i * j->dstep];
+        gradient_weights(wv, Dk, j->E[i * j->dstep], A, rk, &w[4 * ns]);
         ns++;
         rect_merge(&j->bbs[slot], &j->box);
     }
@@ -349,12 +335,7 @@ static inline void weights8_density(const float wv[4], float D, float E, const v
 
 static inline void weights8_gradient(const float wv[4], float D, float E, const vs_footprint *fp, float w8[8])
 {
-    const float A = fp->A, rk = fp->row_k;
-    float wD = wv[0] * D;
-    w8[0] = wD;
-    w8[1] = -2.0f * wD * A;
-    w8[2] = -2.0f * wD * rk;
-    w8[3] = wv[0] * E;
+    gradient_weights(wv, D, E, fp->A, fp->row_k, w8);
     for (int c = 4; c < 8; c++) w8[c] = w8[c - 4];
 }
 

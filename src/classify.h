@@ -24,14 +24,20 @@ vs_status vs_classify_setup(vs_context *ctx, const struct vs_volume *vol,
 void vs_classify_eval(const vs_classify *c, const vs_settings *s, double value,
                       float rgb[3], float *alpha);
 /* Table lookup (linear interpolation; clamps outside the domain). */
-static inline float vs_classify_alpha(const vs_classify *c, float value)
+/* Any table over the classification's domain (the opacity, or the
+ * frame's slab-corrected copy of it) at a value. */
+static inline float vs_classify_lookup(const vs_classify *c, const float *table, float value)
 {
     float x = (float)((value - c->vmin) * c->scale);
     if (!(x > 0.0f)) x = 0.0f; /* also catches NaN */
-    if (x >= (float)(VS_TF_TABLE - 1)) return c->alpha[VS_TF_TABLE - 1];
+    if (x >= (float)(VS_TF_TABLE - 1)) return table[VS_TF_TABLE - 1];
     int i = (int)x;
     float f = x - (float)i;
-    return c->alpha[i] + f * (c->alpha[i + 1] - c->alpha[i]);
+    return table[i] + f * (table[i + 1] - table[i]);
+}
+static inline float vs_classify_alpha(const vs_classify *c, float value)
+{
+    return vs_classify_lookup(c, c->alpha, value);
 }
 /* Opacity for a sample of length `len` view units: 1-(1-a)^len. */
 static inline double vs_opacity_correct(double a, double len)

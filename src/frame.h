@@ -56,6 +56,7 @@ typedef struct vs_frame {
     struct vs_brick_view {
         float x0, x1, y0, y1, z0, z1;
         float sc; /* largest footprint scale of its voxels (perspective; else 1) */
+        int kf, kl; /* the first and last sheet its voxels' kernels reach */
     } *bview;
 
     /* tiles */

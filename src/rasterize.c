@@ -17,7 +17,6 @@ sheet_geom vs_sheet_geom(const vs_frame *F, int k)
     return sh;
 }
 
-
 /* Row range of a footprint inside the buffer (buffer row y is image row
  * y + oy, oy = y0 - 1). */
 static inline int rows_of(const tile_ctx *t, const section *sec, int *ya, int *yb)

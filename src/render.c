@@ -84,6 +84,10 @@ static void bin_task(void *arg, int worker, int c)
             bv->y1 = (float)box[3] + 1e-3f;
             bv->z0 = (float)lo[2] - 1e-3f;
             bv->z1 = (float)hi[2] + 1e-3f;
+            /* the sheets its kernels reach, for every tile it is binned to */
+            const float fslab = (float)F->fp.slab, frz = (float)F->fp.rz;
+            bv->kf = (int)floorf((bv->z0 - frz) / fslab);
+            bv->kl = (int)floorf((bv->z1 + frz) / fslab);
             if (hi[2] - rz < cam->near_z) bv->x0 = bv->x1 = bv->y0 = bv->y1 = NAN;
         }
         int tx0, tx1, ty0, ty1;
@@ -157,13 +161,11 @@ static void sheet_skew_task(void *arg, int worker, int i)
  * nothing changes: use_skewed stays as it was. */
 static void setup_sheet_tables(vs_frame *F, struct vs_pool *pool, int ch)
 {
-    const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
     int k0 = INT_MAX, k1 = INT_MIN;
     for (size_t b = 0; b < F->rel->nbricks; b++) {
         if (isnan(F->bview[b].x0)) continue; /* behind the near plane */
-        int a = (int)floorf((F->bview[b].z0 - rz) / slab), c = (int)floorf((F->bview[b].z1 + rz) / slab);
-        if (a < k0) k0 = a;
-        if (c > k1) k1 = c;
+        if (F->bview[b].kf < k0) k0 = F->bview[b].kf;
+        if (F->bview[b].kl > k1) k1 = F->bview[b].kl;
     }
     if (k0 > k1 || (long)k1 - k0 >= 65536) return;
     const double det = (double)F->fp.A * F->fp.C - (double)F->fp.B * F->fp.B;

@@ -7,18 +7,6 @@
 #include "sheet_classify.h"
 #include "occlusion.h"
 
-static inline float lookup_corr(const vs_frame *F, const float *table, float v)
-{
-    const vs_classify *c = F->cls;
-    float x = (float)((v - c->vmin) * c->scale);
-    if (!(x > 0.0f)) x = 0.0f;
-    if (x >= (float)(VS_TF_TABLE - 1)) return table[VS_TF_TABLE - 1];
-    int i = (int)x;
-    float f = x - (float)i;
-    return table[i] + f * (table[i + 1] - table[i]);
-}
-
-
 /* With a transfer function that makes value 0 visible, sheet pixels whose
  * slab centre lies outside the volume (where nothing was splatted, so q = 0)
  * must stay transparent, as they are for the ray caster. */
@@ -126,7 +114,7 @@ uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_b
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
             int o = (y - 1) * t->tw + (x - 1);
             size_t b = (size_t)y * t->stride + x;
-            sb.alpha[o] = lookup_corr(F, F->alpha_corr, sv->q[4 * b + 3]);
+            sb.alpha[o] = vs_classify_lookup(F->cls, F->alpha_corr, sv->q[4 * b + 3]);
         }
     return classify_finish(t, sv, sb);
 }

@@ -69,19 +69,8 @@ static int scratch_reserve(vs_tile_scratch *s, size_t bytes, size_t zero)
     return 1;
 }
 
-/* A bucket array no sheet reads again: the largest is kept for the next
- * tile's first bucket. */
-static void keep_or_free(vs_tile_scratch *s, pend *p, int cap)
-{
-    if (!p) return;
-    if (cap > s->spare_cap) {
-        free(s->spare);
-        s->spare = p;
-        s->spare_cap = cap;
-    } else {
-        free(p);
-    }
-}
+/* The first sheet of the tile's brick e (its kernels reach no earlier). */
+static inline int first_sheet(const vs_frame *F, const uint32_t *ent, int e) { return F->bview[ent[e]].kf; }
 
 void vs_tile_render(void *arg, int worker, int task)
 {
@@ -121,16 +110,15 @@ void vs_tile_render(void *arg, int worker, int task)
     const uint32_t *ent = F->tile_entries + F->tile_start[task];
     const int nbr = (int)(F->tile_start[task + 1] - F->tile_start[task]);
     const int ch = st->ch;
-    const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
+    const float slab = (float)F->fp.slab;
     const float thr = (float)s->occlusion_threshold;
 
     /* the sheets the bricks span */
     int kmin = 1 << 30, kmax = -(1 << 30);
     for (int e = 0; e < nbr; e++) {
         const struct vs_brick_view *bv = &F->bview[ent[e]];
-        const int kf = (int)floorf((bv->z0 - rz) / slab), kl = (int)floorf((bv->z1 + rz) / slab);
-        if (kf < kmin) kmin = kf;
-        if (kl > kmax) kmax = kl;
+        if (bv->kf < kmin) kmin = bv->kf;
+        if (bv->kl > kmax) kmax = bv->kl;
     }
     const int span = nbr > 0 ? kmax - kmin + 1 : 0;
 
@@ -153,7 +141,6 @@ void vs_tile_render(void *arg, int worker, int task)
     const size_t o_alpha = take(&c, (size_t)npix * sizeof(float));
     const size_t o_sat = take(&c, (size_t)(t.tw + 1) * (t.th + 1) * sizeof(int));
     const size_t o_live = take(&c, (size_t)(2 * t.th + 2 * t.bh) * sizeof(int));
-    const size_t o_kfb = take(&c, (size_t)nbr * sizeof(int));
     const size_t o_order = take(&c, (size_t)nbr * sizeof(int));
     const size_t o_bucket = take(&c, ((size_t)span + 1) * sizeof(int));
     const size_t o_bk = take(&c, (size_t)span * sizeof(pend_bucket));
@@ -175,7 +162,7 @@ void vs_tile_render(void *arg, int worker, int task)
      * buffer row, a sheet's shaded span */
     int *live0 = (int *)(A + o_live), *live1 = live0 + t.th;
     int *span_xa = live0 + 2 * t.th, *span_xb = span_xa + t.bh;
-    int *kfb = (int *)(A + o_kfb), *order = (int *)(A + o_order), *bucket = (int *)(A + o_bucket);
+    int *order = (int *)(A + o_order), *bucket = (int *)(A + o_bucket);
     float **ring = (float **)(A + o_ring);
     rect *bbox = (rect *)(A + o_bbox);
     t.blk = nblk ? (float *)(A + o_blk) : NULL;
@@ -217,12 +204,11 @@ void vs_tile_render(void *arg, int worker, int task)
 
     /* a counting sort of the bricks by their first sheet */
     if (nbr > 0) {
-        for (int e = 0; e < nbr; e++) kfb[e] = (int)floorf((F->bview[ent[e]].z0 - rz) / slab);
         ts.bk = (pend_bucket *)(A + o_bk);
         memset(ts.bk, 0, (size_t)span * sizeof *ts.bk);
-        for (int e = 0; e < nbr; e++) bucket[kfb[e] - kmin + 1]++;
+        for (int e = 0; e < nbr; e++) bucket[first_sheet(F, ent, e) - kmin + 1]++;
         for (int b = 0; b < span; b++) bucket[b + 1] += bucket[b];
-        for (int e = 0; e < nbr; e++) order[bucket[kfb[e] - kmin]++] = e; /* stable */
+        for (int e = 0; e < nbr; e++) order[bucket[first_sheet(F, ent, e) - kmin]++] = e; /* stable */
         ts.kmin = kmin;
         ts.kmax = kmax;
     }
@@ -238,7 +224,7 @@ void vs_tile_render(void *arg, int worker, int task)
         const int opening = k + ahead;
         if (opening <= kmax) {
             const double t0 = vs_now_ms();
-            while (next_brick < nbr && kfb[order[next_brick]] == opening)
+            while (next_brick < nbr && first_sheet(F, ent, order[next_brick]) == opening)
                 vs_expand_brick(&ts, ent[order[next_brick++]], opening);
             const double tp = tr ? vs_now_ms() : 0.0;
             if (multi)
@@ -323,8 +309,8 @@ void vs_tile_render(void *arg, int worker, int task)
     vs_composite_finish(&t, acc);
     /* leave the sheet buffers zero for the next tile, and the lists to it */
     for (int i = 0; i < R; i++) clear_rect(ring[i], t.stride, ch, &bbox[i]);
-    for (int b = 0; b < span && ts.bk; b++) keep_or_free(scr, ts.bk[b].p, ts.bk[b].cap);
-    keep_or_free(scr, ts.spare, ts.spare_cap);
+    for (int b = 0; b < span && ts.bk; b++) vs_keep_spare(&scr->spare, &scr->spare_cap, ts.bk[b].p, ts.bk[b].cap);
+    vs_keep_spare(&scr->spare, &scr->spare_cap, ts.spare, ts.spare_cap);
     scr->active = ts.active;
     scr->abox = ts.abox;
     scr->cap_active = ts.cap_active;

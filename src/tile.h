@@ -11,6 +11,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 
 typedef struct rect {
     int x0, y0, x1, y1; /* half-open, buffer coordinates */
@@ -83,6 +84,21 @@ typedef struct pend {
     int kl;        /* last sheet (lowered when the voxel is culled) */
     float w[4];    /* splat weights before the slab's depth integral */
 } pend;
+
+/* A voxel array no sheet reads again: the larger of it and the spare is
+ * kept as the spare (for the next bucket, or the next tile), the other
+ * freed. */
+static inline void vs_keep_spare(pend **spare, int *spare_cap, pend *p, int cap)
+{
+    if (!p) return;
+    if (!*spare || cap > *spare_cap) {
+        free(*spare);
+        *spare = p;
+        *spare_cap = cap;
+    } else {
+        free(p);
+    }
+}
 
 /* The voxels whose first sheet is one sheet, in the order they came. */
 typedef struct pend_bucket {
