@@ -141,7 +141,7 @@ void vs_weights_post_alpha(const vs_frame *F, const pend *p, unsigned live, floa
 /* Perspective: a slab is crossed by the pixel's ray over its thickness
  * times the ray's length per unit depth, so its opacity grows to
  * 1 - (1 - a)^len (the ray caster steps the same way). */
-static void perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
+void vs_perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
 {
     const vs_camera *cam = &t->F->cam;
     for (int y = r->y0; y < r->y1; y++)
@@ -165,7 +165,6 @@ void vs_shade_post_lut(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, sv->q + ch * b, ch, sp->xb[y] - sp->xa[y], sv->tabs);
     }
-    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
 }
 
 /* Post-shaded, exact normals: the light evaluated per pixel. */
@@ -187,7 +186,6 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             c[1] = rgb[1] * d + spec;
             c[2] = rgb[2] * d + spec;
         }
-    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
 }
 
 /* Pre-shaded: opacity-weighted colour / interpolated opacity, and the
@@ -215,13 +213,11 @@ void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             c[2] = cb > 1.0f ? 1.0f : cb;
             sb.alpha[o] = pre_opacity(F, a);
         }
-    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
 }
 
 /* Pre-shaded, post-classified opacity: the splatted colour, clamped. */
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
-    const vs_frame *F = t->F;
     const spans *sp = sv->sp;
     const float *q = sv->q;
     for (int y = sp->y0; y < sp->y1; y++)
@@ -235,5 +231,4 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
             }
         }
-    if (F->cam.persp) perspective_opacity(t, sp, sb.alpha);
 }

@@ -16,5 +16,8 @@ void vs_shade_post_lut(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+/* After any of them, with perspective: each pixel's opacity for the
+ * length of its ray through the slab. */
+void vs_perspective_opacity(const tile_ctx *t, const spans *r, float *alpha);
 
 #endif

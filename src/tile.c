@@ -14,6 +14,7 @@
 #include "activate.h"
 #include "composite.h"
 #include "occlusion.h"
+#include "shade.h"
 #include "trace.h"
 
 #include <math.h>
@@ -274,6 +275,7 @@ void vs_tile_render(void *arg, int worker, int task)
             for (int y = sp.y0; y < sp.y1; y++) ws->px_classified += (uint64_t)(sp.xb[y] - sp.xa[y]);
             /* 2. shading: colour per pixel */
             st->shade(&t, &sv, sb);
+            if (F->cam.persp) vs_perspective_opacity(&t, &sp, sb.alpha);
             const double t2 = vs_now_ms();
             /* 3. front-to-back compositing; the accumulated opacity is the
              * tile's occlusion map */
