@@ -50,6 +50,7 @@ uint64_t vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, flo
         /* four pixels a step: GCC does not vectorise the strided opacity
          * load, and this pass runs over every classified pixel */
         const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+        __m128i nv = _mm_setzero_si128(); /* per lane, minus the pixels kept */
         for (; i + 4 <= n; i += 4) {
             const __m128 a01 = _mm_shuffle_ps(_mm_loadu_ps(a + 4 * i - 3), _mm_loadu_ps(a + 4 * i + 1),
                                               _MM_SHUFFLE(3, 3, 3, 3)); /* a0 a0 a1 a1 */
@@ -58,8 +59,12 @@ uint64_t vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, flo
             const __m128 op = _mm_shuffle_ps(a01, a23, _MM_SHUFFLE(2, 0, 2, 0)); /* a0 a1 a2 a3 */
             const __m128 x = _mm_andnot_ps(_mm_cmpge_ps(op, one), _mm_loadu_ps(al + i));
             _mm_storeu_ps(al + i, x);
-            v += __builtin_popcount((unsigned)_mm_movemask_ps(_mm_cmpgt_ps(x, zero)));
+            nv = _mm_add_epi32(nv, _mm_castps_si128(_mm_cmpgt_ps(x, zero))); /* a true lane is -1 */
         }
+        /* no popcount: baseline x86-64 has no instruction for it */
+        nv = _mm_add_epi32(nv, _mm_shuffle_epi32(nv, _MM_SHUFFLE(1, 0, 3, 2)));
+        nv = _mm_add_epi32(nv, _mm_shuffle_epi32(nv, _MM_SHUFFLE(2, 3, 0, 1)));
+        v -= _mm_cvtsi128_si32(nv);
 #endif
         for (; i < n; i++) {
             const float x = a[4 * i] >= 1.0f ? 0.0f : al[i];
