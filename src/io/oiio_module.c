@@ -12,6 +12,29 @@
 #include <string.h>
 #include <unistd.h>
 
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define VS_LSAN_EARLY 1
+#endif
+#elif defined(__SANITIZE_ADDRESS__)
+#define VS_LSAN_EARLY 1
+#endif
+#ifdef VS_LSAN_EARLY
+#include <pthread.h>
+#include <sanitizer/lsan_interface.h>
+
+/* Sanitizer builds only.  OpenImageIO loads OpenVDB, whose log4cplus starts
+ * threads when loaded and stops them from a destructor at exit, registered
+ * after LeakSanitizer's exit-time check and so run before it: that check can
+ * then meet threads half way through exiting, and its tracer crashes
+ * ("Tracer caught signal 11").  An atexit handler registered after the
+ * module is loaded runs before that destructor, while those threads are
+ * idle; the check made there is the process's only one. */
+static void lsan_check_now(void) { __lsan_do_leak_check(); }
+static void lsan_register(void) { atexit(lsan_check_now); }
+static pthread_once_t lsan_once = PTHREAD_ONCE_INIT;
+#endif
+
 #ifndef VS_INSTALL_LIBDIR
 #define VS_INSTALL_LIBDIR "lib"
 #endif
@@ -38,6 +61,9 @@ static const vs_oiio_api *try_open(const char *path, void **handle, char *why, s
         return NULL;
     }
     *handle = h;
+#ifdef VS_LSAN_EARLY
+    pthread_once(&lsan_once, lsan_register);
+#endif
     return api;
 }
 
