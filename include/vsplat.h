@@ -242,6 +242,11 @@ VS_API void *vs_volume_data(vs_volume *v); /* x fastest, then y, then z */
 VS_API void vs_volume_dims(const vs_volume *v, int dims[3]);
 VS_API void vs_volume_spacing(const vs_volume *v, double spacing[3]);
 VS_API vs_type vs_volume_type(const vs_volume *v);
+/* Index-to-world transform, millimetres, world axes RAS (+x right,
+ * +y anterior, +z superior): m is a row-major 3x4 matrix, world =
+ * m[0..2] * (i,j,k) + m[3].  Returns 1 when the file gave an orientation, 0
+ * when it is assumed (diag(spacing): raw data, image stacks, scenes). */
+VS_API int vs_volume_affine(const vs_volume *v, double m[12]);
 VS_API const char *vs_type_name(vs_type t);
 /* Recompute the value range after writing into vs_volume_data(). */
 VS_API void vs_volume_update_range(vs_volume *v);

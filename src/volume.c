@@ -66,6 +66,7 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
     for (int a = 0; a < 3; a++) {
         v->dims[a] = dims[a];
         v->spacing[a] = spacing ? spacing[a] : 1.0;
+        v->affine[a][a] = v->spacing[a];
     }
     v->default_iso = NAN;
     v->default_ramp = NAN;
@@ -97,6 +98,34 @@ void vs_volume_spacing(const vs_volume *v, double spacing[3])
 {
     if (!spacing) return;
     for (int a = 0; a < 3; a++) spacing[a] = v ? v->spacing[a] : 0.0;
+}
+vs_status vs_volume_set_affine(vs_context *ctx, struct vs_volume *v, const double m[3][4])
+{
+    double sp[3];
+    for (int c = 0; c < 3; c++) {
+        sp[c] = sqrt(m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c]);
+        if (!isfinite(sp[c]) || !(sp[c] > 1e-12) || sp[c] > 1e12 || !isfinite(m[c][3]))
+            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
+                                "volume: orientation matrix column %d has length %g (must be finite and > 0)", c,
+                                sp[c]);
+    }
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(fabs(det) > 1e-6 * sp[0] * sp[1] * sp[2]))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume: orientation matrix is singular");
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) v->affine[r][c] = m[r][c];
+    for (int a = 0; a < 3; a++) v->spacing[a] = sp[a];
+    v->has_orientation = 1;
+    return VS_OK;
+}
+int vs_volume_affine(const vs_volume *v, double m[12])
+{
+    if (!m) return 0;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) m[4 * r + c] = v ? v->affine[r][c] : 0.0;
+    return v ? v->has_orientation : 0;
 }
 vs_type vs_volume_type(const vs_volume *v) { return v ? v->type : VS_U8; }
 int vs_volume_has_analytic(const vs_volume *v) { return v && v->has_analytic; }

@@ -28,6 +28,13 @@ struct vs_volume {
     vs_analytic analytic;
     double default_iso;  /* scene's iso; NAN if none                          */
     double default_ramp; /* scene's ramp; NAN if none                         */
+    /* Index to world: world = affine[0..2][0..2] * (i,j,k) + affine[.][3], in
+     * millimetres, world axes RAS (+x right, +y anterior, +z superior), rows
+     * of a 3x4 matrix.  Without orientation (raw, image stacks, scenes) it is
+     * diag(spacing) with has_orientation 0.  spacing[a] is always the norm of
+     * column a. */
+    double affine[3][4];
+    int has_orientation;
     uint64_t serial;     /* unique per allocation and per vs_volume_update_range:
                             what caches key on (an address can be reused, and
                             data rewritten in place keeps it) */
@@ -71,6 +78,10 @@ static inline void vs_volume_grid_gradient(const struct vs_volume *v, int i, int
         g[a] = (float)gr;
     }
 }
+/* Set the index-to-world (RAS, mm) transform from a loader; the spacing
+ * becomes its column norms.  VS_ERR_INVALID_ARGUMENT (volume unchanged) if a
+ * column is zero, not finite or the matrix is singular. */
+vs_status vs_volume_set_affine(vs_context *ctx, struct vs_volume *v, const double m[3][4]);
 /* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out);
