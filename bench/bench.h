@@ -109,6 +109,8 @@ int bench_kernels(const bench_opts *o); /* mode_kernels.c: SIMD kernels per ISA 
 int bench_limits(const bench_opts *o);  /* mode_limits.c: each stage against the machine's limits */
 /* mode_peers.c: vsplat against VolPack's octree renderer (a note if built without VolPack) */
 int bench_peers(const bench_opts *o);
+/* mode_oracle.c: post-cd with and without the voxels that cannot show */
+int bench_oracle(const bench_opts *o);
 /* frame takes the render options of `vsplat render` (argv after "frame") */
 int bench_frame(const bench_opts *o, int argc, char **argv);
 
