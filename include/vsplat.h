@@ -62,10 +62,13 @@ typedef enum vs_pipeline {
  * that the settings' azimuth and elevation are added to: posterior 0,0
  * (looks along +y, +z up), anterior 180,0, left -90,0 (face to the image's
  * left), right 90,0, superior 0,90 (anterior up), inferior 180,-90
- * (anterior up, the patient's right on the image's left). */
+ * (anterior up, the patient's right on the image's left).  VS_VIEW_AUTO,
+ * the default, is VS_VIEW_ANTERIOR when the volume has an orientation and
+ * azimuth and elevation are both 0 (the front by default), else the angles
+ * alone: when turning the angles from the front, say VS_VIEW_ANTERIOR. */
 typedef enum vs_view {
-    VS_VIEW_AUTO = 0,      /* anterior for a volume with an orientation, else 0,0 */
-    VS_VIEW_ANGLES = 1,    /* the angles alone: 0,0 (posterior)                     */
+    VS_VIEW_AUTO = 0,      /* the front by default, else the angles (above)  */
+    VS_VIEW_ANGLES = 1,    /* the angles alone: 0,0 (posterior)              */
     VS_VIEW_ANTERIOR = 2,
     VS_VIEW_POSTERIOR = 3,
     VS_VIEW_LEFT = 4,

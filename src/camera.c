@@ -34,12 +34,15 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-/* The (azimuth, elevation) each view starts from (vsplat.h, vs_view). */
-static int view_base(vs_view v, int oriented, double *az, double *el)
+/* The (azimuth, elevation) each view starts from (vsplat.h, vs_view).
+ * AUTO is the front only for the default angles, so that a program that
+ * sets its own angles gets them in the world frame. */
+static int view_base(const vs_settings *s, int oriented, double *az, double *el)
 {
     static const double base[8][2] = {{0, 0}, {0, 0}, {180, 0}, {0, 0}, {-90, 0}, {90, 0}, {0, 90}, {180, -90}};
+    vs_view v = s->view;
     if ((int)v < 0 || (int)v > VS_VIEW_INFERIOR) return 0;
-    if (v == VS_VIEW_AUTO && oriented) v = VS_VIEW_ANTERIOR;
+    if (v == VS_VIEW_AUTO && oriented && s->azimuth == 0.0 && s->elevation == 0.0) v = VS_VIEW_ANTERIOR;
     *az = base[v][0];
     *el = base[v][1];
     return 1;
@@ -49,7 +52,7 @@ static int view_base(vs_view v, int oriented, double *az, double *el)
 static vs_status world_axes(vs_context *ctx, const struct vs_volume *vol, const vs_settings *s, double R[3][3])
 {
     double az0, el0;
-    if (!view_base(s->view, vol->has_orientation, &az0, &el0))
+    if (!view_base(s, vol->has_orientation, &az0, &el0))
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "view %d is not a vs_view", (int)s->view);
     if (!isfinite(s->roll))
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "roll must be finite");

@@ -112,6 +112,10 @@ same superior.png s090.png "--view superior = 0,90"
 same inferior.png i180.png "--view inferior = 180,-90"
 same posterior.png p000.png "--view posterior = 0,0"
 differ anterior.png posterior.png "anterior and posterior differ"
+# a turntable without --view turns from the front: frame 1 of 4 is the left view
+expect_ok "turntable" render ras.nrrd "${R[@]}" --turntable 4 -o tt.png
+same tt_0000.png anterior.png "turntable frame 0 = anterior"
+same tt_0001.png left.png "turntable frame 1 of 4 = left"
 # upright and upside down: 180,180 is allowed and is 0,0 rolled; --up says the same
 view upside --view 180,180
 view roll180 --view 0,0 --roll 180

@@ -327,6 +327,9 @@ int main(void)
             int vol;
         } eq[] = {
             {VS_VIEW_AUTO, 0, 0, 0, {0}, 0, VS_VIEW_ANTERIOR, 0, 0, 0, {0}, 0, 0},
+            /* a program's own angles keep their world meaning */
+            {VS_VIEW_AUTO, 180, 0, 0, {0}, 0, VS_VIEW_ANGLES, 180, 0, 0, {0}, 0, 0},
+            {VS_VIEW_AUTO, 30, 20, 0, {0}, 0, VS_VIEW_ANGLES, 30, 20, 0, {0}, 0, 0},
             {VS_VIEW_ANTERIOR, 0, 0, 0, {0}, 0, VS_VIEW_ANGLES, 180, 0, 0, {0}, 0, 0},
             {VS_VIEW_LEFT, 0, 0, 0, {0}, 0, VS_VIEW_ANGLES, 270, 0, 0, {0}, 0, 0},
             {VS_VIEW_RIGHT, 0, 0, 0, {0}, 0, VS_VIEW_ANGLES, -270, 0, 0, {0}, 0, 0},
