@@ -4,6 +4,7 @@
 #include "volume.h"
 
 #include <math.h>
+#include <string.h>
 
 /* cos and sin of an angle in degrees, exact at multiples of 90 degrees so
  * that axis views, flips and permutations give exact zeros in the camera. */
@@ -235,8 +236,10 @@ vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
             }
             cam->t[r] = t;
         }
-        if (!invert3(cam->M, cam->Minv))
-            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume transform is singular");
+        double Mc[3][3], Mi[3][3];
+        memcpy(Mc, cam->M, sizeof Mc);
+        if (!invert3(Mc, Mi)) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume transform is singular");
+        memcpy(cam->Minv, Mi, sizeof Mi);
         for (int a = 0; a < 3; a++) {
             double *o[3] = {cam->right, cam->up, cam->dir};
             for (int r = 0; r < 3; r++)
