@@ -379,9 +379,16 @@ int main(void)
         b.up[0] = 0, b.up[1] = 2, b.up[2] = 0;
         CHECK(vs_render(ctx, vol[0], &b, &ia, NULL) == VS_ERR_INVALID_ARGUMENT, "up along the view accepted");
         CHECK(strstr(vs_last_error(ctx), "up"), "message: %s", vs_last_error(ctx));
+        b.up[1] = NAN;
+        CHECK(vs_render(ctx, vol[0], &b, &ia, NULL) == VS_ERR_INVALID_ARGUMENT, "up NaN accepted");
         b.has_up = 0;
+        b.roll = INFINITY;
+        CHECK(vs_render(ctx, vol[0], &b, &ia, NULL) == VS_ERR_INVALID_ARGUMENT, "roll inf accepted");
+        b.roll = 0;
         b.view = (vs_view)42;
         CHECK(vs_render(ctx, vol[0], &b, &ia, NULL) == VS_ERR_INVALID_ARGUMENT, "view 42 accepted");
+        b.view = (vs_view)-1;
+        CHECK(vs_render(ctx, vol[0], &b, &ia, NULL) == VS_ERR_INVALID_ARGUMENT, "view -1 accepted");
     }
 
     /* a sheared transform renders as it says: voxels sampled on a sheared
