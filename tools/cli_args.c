@@ -591,7 +591,7 @@ void cli_render_usage(FILE *f)
             "  --print-stats          per-stage timing table on stdout\n"
             "  --trace FILE.json      timeline of every thread's tiles and stages (Chrome Trace\n"
             "                         Event format: open in ui.perfetto.dev or chrome://tracing)\n"
-            "  -q                     quiet: no summary line and no notes\n"
+            "  -q                     quiet: no summary line, no notes, no progress\n"
             "pipeline and classification:\n"
             "  --pipeline P           pre | post-cd | post-gs | post-alpha | raycast (default post-cd)\n"
             "  --iso LO[:HI]          iso-range in data units (default: Otsu threshold, open range)\n"
