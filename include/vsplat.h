@@ -57,6 +57,26 @@ typedef enum vs_pipeline {
     VS_PIPELINE_RAYCAST = 4     /* reference ray caster                         */
 } vs_pipeline;
 
+/* Where the camera starts, in the world frame (RAS: +x right, +y anterior,
+ * +z superior; docs/DESIGN.md §2).  Each is an (azimuth, elevation) pair
+ * that the settings' azimuth and elevation are added to: posterior 0,0
+ * (looks along +y, +z up), anterior 180,0, left -90,0 (face to the image's
+ * left), right 90,0, superior 0,90 (anterior up), inferior 180,-90
+ * (anterior up, the patient's right on the image's left).  VS_VIEW_AUTO,
+ * the default, is VS_VIEW_ANTERIOR when the volume has an orientation and
+ * azimuth and elevation are both 0 (the front by default), else the angles
+ * alone: when turning the angles from the front, say VS_VIEW_ANTERIOR. */
+typedef enum vs_view {
+    VS_VIEW_AUTO = 0,      /* the front by default, else the angles (above)  */
+    VS_VIEW_ANGLES = 1,    /* the angles alone: 0,0 (posterior)              */
+    VS_VIEW_ANTERIOR = 2,
+    VS_VIEW_POSTERIOR = 3,
+    VS_VIEW_LEFT = 4,
+    VS_VIEW_RIGHT = 5,
+    VS_VIEW_SUPERIOR = 6,
+    VS_VIEW_INFERIOR = 7
+} vs_view;
+
 typedef enum vs_isa {
     VS_ISA_AUTO = 0, VS_ISA_SCALAR = 1, VS_ISA_SSE4 = 2, VS_ISA_AVX2 = 3, VS_ISA_AVX512 = 4
 } vs_isa;
@@ -89,7 +109,9 @@ typedef struct vs_settings {
                                   no more of *stats (both set by the init)     */
     vs_pipeline pipeline;
     int width, height;         /* image size in pixels (default 512x512)        */
-    double azimuth, elevation; /* degrees; view 0,0 looks along +y, +z up        */
+    double azimuth, elevation; /* degrees, world frame, added to `view`'s angles:
+                                  0,0 looks along +y (from behind), +z up; azimuth
+                                  turns about +z, elevation looks down from above */
     double zoom;               /* largest physical extent spans zoom*width       */
     int has_center;            /* use center[] (voxel coordinates) if non-zero  */
     double center[3];
@@ -144,6 +166,14 @@ typedef struct vs_settings {
     /* profiling: record the frame's timeline into this trace (vs_trace_create;
      * NULL, the default: nothing is recorded and nothing costs) */
     vs_trace *trace;
+
+    /* the view in the world frame (docs/DESIGN.md §2) */
+    vs_view view;              /* starting direction (default VS_VIEW_AUTO)       */
+    int has_up;                /* 1: up[] (world) is shown upwards               */
+    double up[3];              /* projected onto the image plane; must not lie
+                                  along the viewing direction                    */
+    double roll;               /* degrees: turns the picture clockwise about its
+                                  centre, after `up` (default 0)                 */
 } vs_settings;
 
 typedef struct vs_stage_times {

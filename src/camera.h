@@ -5,15 +5,21 @@
 #include "volume.h"
 #include <math.h>
 
-/* World space: physical units (mm), volume centred at the origin, voxel i at
- * (i - (n-1)/2) * spacing.  View space: x right and y down in pixels, z along
- * the viewing direction in "view units" (the smallest voxel spacing). */
+/* World space: RAS millimetres (+x right, +y anterior, +z superior) through
+ * the volume's index-to-world transform (vol->affine; diag(spacing) for a
+ * volume without orientation).  The camera is set up there and carried into
+ * the volume's "grid frame": millimetres along the index axes, g = spacing *
+ * index, centred on the volume.  View space: x right and y down in pixels, z
+ * along the viewing direction in "view units" (the smallest voxel spacing). */
 typedef struct vs_camera {
     int width, height;
-    double right[3], up[3], dir[3]; /* world-space unit vectors               */
+    /* The image axes as seen by a grid-frame gradient: the eye-frame normal
+     * of a gradient g (per index step) is (gw.right, -gw.up, gw.dir) with gw
+     * = g / spacing.  Orthonormal unless the transform is sheared. */
+    double right[3], up[3], dir[3];
+    double wright[3], wup[3], wdir[3]; /* the same in world space (unit)      */
     double px_per_mm;               /* pixels per world unit                  */
     double z_per_mm;                /* view units per world unit              */
-    double center_world[3];         /* world point at the image centre        */
     /* index -> view: v = M * idx + t  (x,y pixels, z view units)            */
     double M[3][3], t[3];
     double Minv[3][3];              /* view -> index (for ray casting)        */

@@ -74,6 +74,8 @@ void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_s
     s->ray_step = 0.1;
     s->ray_trilinear = 0;
     s->ray_analytic = 1;
+    s->view = VS_VIEW_AUTO;
+    s->up[2] = 1.0;
     memcpy(out, s, struct_size < sizeof *s ? struct_size : sizeof *s);
 }
 

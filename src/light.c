@@ -19,9 +19,10 @@ void vs_light_setup(const vs_settings *s, const vs_camera *cam, vs_light *l)
         l->L[0] = 0.0; l->L[1] = 0.0; l->L[2] = -1.0;
     } else {
         const double *d = s->light_dir;
-        l->L[0] = d[0] * cam->right[0] + d[1] * cam->right[1] + d[2] * cam->right[2];
-        l->L[1] = -(d[0] * cam->up[0] + d[1] * cam->up[1] + d[2] * cam->up[2]);
-        l->L[2] = d[0] * cam->dir[0] + d[1] * cam->dir[1] + d[2] * cam->dir[2];
+        /* light_dir is in world space (RAS for an oriented volume) */
+        l->L[0] = d[0] * cam->wright[0] + d[1] * cam->wright[1] + d[2] * cam->wright[2];
+        l->L[1] = -(d[0] * cam->wup[0] + d[1] * cam->wup[1] + d[2] * cam->wup[2]);
+        l->L[2] = d[0] * cam->wdir[0] + d[1] * cam->wdir[1] + d[2] * cam->wdir[2];
         normalize3(l->L);
         if (!(l->L[0] * l->L[0] + l->L[1] * l->L[1] + l->L[2] * l->L[2] > 0)) {
             l->L[0] = 0.0; l->L[1] = 0.0; l->L[2] = -1.0;

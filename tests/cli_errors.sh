@@ -79,7 +79,7 @@ expect_fail 1 "--trace = output" render "${SCENE[@]}" --trace a.png -o a.png
 expect_err "--trace" "a trace over the output image names the option"
 expect_fail 1 "--isa mmx" render "${SCENE[@]}" --isa mmx -o a.png
 expect_fail 1 "--view 1" render "${SCENE[@]}" --view 1 -o a.png
-expect_fail 1 "--view 0,100" render "${SCENE[@]}" --view 0,100 -o a.png
+expect_fail 1 "--view 0,1e7" render "${SCENE[@]}" --view 0,1e7 -o a.png
 expect_fail 1 "--material 1,1" render "${SCENE[@]}" --material 1,1 -o a.png
 expect_fail 1 "--background 0,0,0,2" render "${SCENE[@]}" --background 0,0,0,2 -o a.png
 expect_fail 1 "--light 0,0,0" render "${SCENE[@]}" --light 0,0,0 -o a.png

@@ -91,13 +91,18 @@ if step "find_package configure" cmake -S "$T/cm" -B "$T/cm/b" -DCMAKE_PREFIX_PA
     # image I/O is a module: the shared library finds it beside itself...
     check_run "find_package shared + image" "$T/cm/b/embed_shared" "$ENGINE" "$T/cm/out_shared.png"
     if [[ -s $T/cm/out_shared.png ]]; then ok; else bad "the shared example wrote no image"; fi
-    # ...a program linked statically, outside the prefix, looks in the
-    # configured install folder (not this temporary prefix), says so, and
-    # takes VSPLAT_OIIO_MODULE
+    # ...and so does a program linked statically through the package,
+    # wherever it lives: the package gives it the prefix it was found in
+    # (an install with --prefix, not the configured /usr/local)
+    check_run "find_package static + image, no VSPLAT_OIIO_MODULE" "$T/cm/b/embed_static" "$ENGINE" "$T/cm/out_static.png"
+    if [[ -s $T/cm/out_static.png ]]; then ok; else bad "the static example wrote no image without VSPLAT_OIIO_MODULE"; fi
+    # moved away from its module, it says where it looked and takes the variable
+    mv "$LIBDIR/vsplat-modules" "$LIBDIR/vsplat-modules.away"
     if "$T/cm/b/embed_static" "$ENGINE" "$T/cm/out.png" >"$T/run" 2>&1; then
-        bad "static example outside the prefix wrote an image without VSPLAT_OIIO_MODULE"
-    elif grep -q "cannot load the OpenImageIO module.*VSPLAT_OIIO_MODULE" "$T/run"; then ok; else
+        bad "static example wrote an image with its module moved away"
+    elif grep -q "cannot load the OpenImageIO module.*$LIBDIR/vsplat-modules.*VSPLAT_OIIO_MODULE" "$T/run"; then ok; else
         bad "static example without the module: $(head -c 600 "$T/run")"; fi
+    mv "$LIBDIR/vsplat-modules.away" "$LIBDIR/vsplat-modules"
     check_run "find_package static + .1dt preset" env VSPLAT_OIIO_MODULE="$LIBDIR/vsplat-modules/vsplat-oiio.so" \
         "$T/cm/b/embed_static" "$ENGINE" "$T/cm/out.png"
     if [[ -s $T/cm/out.png ]]; then ok; else bad "the static example wrote no image"; fi

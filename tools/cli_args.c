@@ -80,7 +80,7 @@ enum opt_id {
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
-    O_TURNTABLE, O_FPS
+    O_TURNTABLE, O_FPS, O_UP, O_ROLL
 };
 
 typedef struct opt_def {
@@ -107,6 +107,8 @@ static const opt_def opt_table[] = {
     {"--fps", 1, O_FPS, 0},
     {"--size", 1, O_SIZE, 0},
     {"--view", 1, O_VIEW, 0},
+    {"--up", 1, O_UP, 0},
+    {"--roll", 1, O_ROLL, 0},
     {"--zoom", 1, O_ZOOM, 0},
     {"--perspective", 1, O_PERSPECTIVE, 0},
     {"--center", 1, O_CENTER, 0},
@@ -319,14 +321,37 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_TURNTABLE: return parse_range_int(n, v, 1, 3600, &o->turntable, err, cap);
     case O_FPS: sn->fps = 1; return parse_range_double(n, v, 0.0, 100.0, 1, &o->fps, err, cap);
     case O_SIZE: return parse_size(v, s, err, cap);
-    case O_VIEW:
-        if (!to_doubles(v, 2, t)) return fail(err, cap, "--view: expected AZ,EL in degrees, got '%s'", v);
-        if (t[1] < -90.0 || t[1] > 90.0)
-            return fail(err, cap, "--view: elevation %g is out of range (-90..90)", t[1]);
-        if (fabs(t[0]) > 1e6) return fail(err, cap, "--view: azimuth %g is out of range", t[0]);
+    case O_VIEW: {
+        static const struct {
+            const char *name;
+            vs_view v;
+        } views[] = {{"anterior", VS_VIEW_ANTERIOR}, {"posterior", VS_VIEW_POSTERIOR}, {"left", VS_VIEW_LEFT},
+                     {"right", VS_VIEW_RIGHT},       {"superior", VS_VIEW_SUPERIOR},   {"inferior", VS_VIEW_INFERIOR}};
+        for (size_t i = 0; i < sizeof views / sizeof views[0]; i++)
+            if (!strcasecmp(v, views[i].name)) {
+                s->view = views[i].v;
+                s->azimuth = s->elevation = 0.0;
+                return 0;
+            }
+        if (!to_doubles(v, 2, t))
+            return fail(err, cap,
+                        "--view: expected anterior, posterior, left, right, superior, inferior or AZ,EL in "
+                        "degrees, got '%s'",
+                        v);
+        if (fabs(t[0]) > 1e6 || fabs(t[1]) > 1e6)
+            return fail(err, cap, "--view: angle %g is out of range (-1e6..1e6)", fabs(t[0]) > 1e6 ? t[0] : t[1]);
+        s->view = VS_VIEW_ANGLES;
         s->azimuth = t[0];
         s->elevation = t[1];
         return 0;
+    }
+    case O_UP:
+        if (!to_doubles(v, 3, t)) return fail(err, cap, "--up: expected X,Y,Z (world direction shown upwards), got '%s'", v);
+        if (t[0] == 0.0 && t[1] == 0.0 && t[2] == 0.0) return fail(err, cap, "--up: the direction must not be zero");
+        s->has_up = 1;
+        memcpy(s->up, t, sizeof s->up);
+        return 0;
+    case O_ROLL: return parse_range_double(n, v, -1e6, 1e6, 0, &s->roll, err, cap);
     case O_ZOOM: return parse_range_double(n, v, 0.0, 1000.0, 1, &s->zoom, err, cap);
     case O_PERSPECTIVE: return parse_range_double(n, v, 0.0, 170.0, 0, &s->perspective_fov, err, cap);
     case O_CENTER:
@@ -549,12 +574,16 @@ void cli_render_usage(FILE *f)
             "\n"
             "input:\n"
             "  INPUT                  .nii/.nii.gz, .nrrd/.nhdr, .tif/.tiff stack, folder or .tar of PNG\n"
-            "                         slices, .den, or raw (with --dims and --type)\n"
+            "                         slices, .den, or raw: with --dims and --type, or named\n"
+            "                         NAME_XxYxZ_TYPE.raw (also .raw.gz, .bin, .vol; TYPE u8, i16, u16\n"
+            "                         or f32, optionally + le/be: e.g. ct_256x256x108_i16le.raw.gz).\n"
+            "                         Raw data and image stacks have no orientation (taken as RAS)\n"
+            "                         and, raw, no spacing (1,1,1 unless --spacing): a note says so\n"
             "  --scene NAME[:N]       synthetic scene: cube, sphere, ml, head, cell (N voxels per side)\n"
             "  --dims X,Y,Z           raw input dimensions (with --type)\n"
             "  --type u8|i16|u16|f32  raw voxel type\n"
             "  --endian little|big    raw byte order (default little)\n"
-            "  --spacing SX,SY,SZ     voxel spacing (overrides the file's)\n"
+            "  --spacing SX,SY,SZ     voxel spacing in mm (overrides the file's; keeps its orientation)\n"
             "output:\n"
             "  -o OUT                 image; format from the extension: .png, .exr, .tif, .tiff, .gif\n"
             "  --bits 8|16            PNG bit depth (default 8)\n"
@@ -562,7 +591,7 @@ void cli_render_usage(FILE *f)
             "  --print-stats          per-stage timing table on stdout\n"
             "  --trace FILE.json      timeline of every thread's tiles and stages (Chrome Trace\n"
             "                         Event format: open in ui.perfetto.dev or chrome://tracing)\n"
-            "  -q                     quiet: no summary line and no notes\n"
+            "  -q                     quiet: no summary line, no notes, no progress\n"
             "pipeline and classification:\n"
             "  --pipeline P           pre | post-cd | post-gs | post-alpha | raycast (default post-cd)\n"
             "  --iso LO[:HI]          iso-range in data units (default: Otsu threshold, open range)\n"
@@ -575,7 +604,12 @@ void cli_render_usage(FILE *f)
             "                         replaces --iso/--ramp/--opacity/--material\n"
             "view:\n"
             "  --size WxH             image size (default 512x512)\n"
-            "  --view AZ,EL           azimuth, elevation in degrees (default 0,0)\n"
+            "  --view V               anterior | posterior | left | right | superior | inferior, or\n"
+            "                         AZ,EL: azimuth, elevation in degrees in the world frame (RAS:\n"
+            "                         0,0 looks along +y from behind, +z up; 180,0 = anterior).\n"
+            "                         Default: anterior for a volume with an orientation, else 0,0\n"
+            "  --up X,Y,Z             world direction shown upwards (e.g. 0,0,1: superior up)\n"
+            "  --roll DEG             turn the picture DEG degrees clockwise (after --up)\n"
             "  --zoom Z               largest extent spans Z of the image width (default 0.8)\n"
             "  --perspective FOV      perspective camera, vertical field of view in degrees, 0..170\n"
             "                         (default 0: orthographic); the centre plane keeps --zoom's scale\n"
@@ -615,5 +649,8 @@ void cli_info_usage(FILE *f)
             "usage: vsplat info INPUT [--dims X,Y,Z --type u8|i16|u16|f32 [--endian little|big]]\n"
             "                         [--spacing SX,SY,SZ]\n"
             "       vsplat info --scene NAME[:N]\n"
-            "prints dims, type, spacing, range, voxels and default_iso, one 'key: value' per line\n");
+            "prints dims, type, spacing, range, voxels, default_iso, analytic, orientation (the\n"
+            "nearest anatomical direction of each index axis, e.g. RAS or LPS, or none) and transform\n"
+            "(index to RAS millimetres, three rows), one 'key: value' per line.  Raw input: --dims and\n"
+            "--type, or a name like NAME_XxYxZ_TYPE.raw (TYPE u8, i16, u16, f32; +le/be)\n");
 }

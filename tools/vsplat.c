@@ -10,7 +10,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 enum { EXIT_USAGE = 1, EXIT_INTERNAL = 2 };
@@ -83,6 +85,106 @@ static int load_input(vs_context *ctx, const cli_opts *o, vs_volume **vol)
                             : vs_volume_load(ctx, o->input, &o->load, vol);
     if (st != VS_OK) return report(ctx, st, o->scene ? "--scene" : o->input);
     return 0;
+}
+
+/* ---- orientation ---- */
+
+/* The nearest anatomical axis of each index axis ("RAS", "LPS", ...): the
+ * largest entry of the normalised columns first, then the next among the
+ * remaining rows and columns.  *oblique: some axis is off its letter's
+ * axis; *sheared: the columns are not orthogonal. */
+static void orientation_code(const double m[12], char code[4], int *oblique, int *sheared)
+{
+    double q[3][3];
+    for (int c = 0; c < 3; c++) {
+        double n = sqrt(m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c]);
+        for (int r = 0; r < 3; r++) q[r][c] = n > 0 ? m[4 * r + c] / n : 0.0;
+    }
+    int row_used[3] = {0, 0, 0}, col_used[3] = {0, 0, 0};
+    *oblique = 0;
+    for (int k = 0; k < 3; k++) {
+        int br = 0, bc = 0;
+        double best = -1.0;
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++)
+                if (!row_used[r] && !col_used[c] && fabs(q[r][c]) > best) best = fabs(q[r][c]), br = r, bc = c;
+        row_used[br] = col_used[bc] = 1;
+        code[bc] = q[br][bc] > 0 ? "RAS"[br] : "LPI"[br];
+        if (best < 1.0 - 1e-6) *oblique = 1;
+    }
+    code[3] = '\0';
+    *sheared = 0;
+    for (int a = 0; a < 3; a++)
+        for (int b = a + 1; b < 3; b++)
+            if (fabs(q[0][a] * q[0][b] + q[1][a] * q[1][b] + q[2][a] * q[2][b]) > 1e-4) *sheared = 1;
+}
+
+/* Raw formats and image stacks carry no spacing (TIFF resolution aside). */
+static int format_has_spacing(const cli_opts *o)
+{
+    static const char *const ext[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz", ".nrrd", ".nhdr",
+                                      ".mha", ".mhd"};
+    if (o->load.raw) return 0;
+    size_t n = strlen(o->input);
+    for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++) {
+        size_t m = strlen(ext[i]);
+        if (n >= m && !strcasecmp(o->input + n - m, ext[i])) return 1;
+    }
+    return 0;
+}
+
+/* "Never silently assume": what the file did not say, on stderr. */
+static void geometry_notes(const cli_opts *o, const vs_volume *vol)
+{
+    if (o->scene) return;
+    double m[12], sp[3];
+    if (vs_volume_affine(vol, m)) return;
+    vs_volume_spacing(vol, sp);
+    fprintf(stderr,
+            "vsplat: note: %s: no orientation in the file; its x, y, z axes are taken as right, anterior, "
+            "superior (RAS)\n",
+            o->input);
+    if (!o->load.has_spacing && !format_has_spacing(o) && sp[0] == 1.0 && sp[1] == 1.0 && sp[2] == 1.0)
+        fprintf(stderr, "vsplat: note: %s: no voxel spacing in the file; assumed 1,1,1 (give --spacing SX,SY,SZ)\n",
+                o->input);
+}
+
+/* ---- progress ---- */
+
+/* On a terminal, a render that has run for a second shows its progress on
+ * stderr ("\r", one line, cleared at the end); nothing otherwise. */
+typedef struct progress {
+    double t0, last;
+    int frame, frames, shown;
+} progress;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static int show_progress(void *user, double fraction)
+{
+    progress *p = user;
+    double t = now_s();
+    if (t - p->t0 < 1.0 || (t - p->last < 0.1 && fraction < 1.0)) return 0;
+    p->last = t;
+    p->shown = 1;
+    double all = (p->frame + fraction) / p->frames;
+    if (p->frames > 1)
+        fprintf(stderr, "\rvsplat: rendering frame %d of %d, %3.0f%%", p->frame + 1, p->frames, 100.0 * all);
+    else
+        fprintf(stderr, "\rvsplat: rendering %3.0f%%", 100.0 * all);
+    fflush(stderr);
+    return 0;
+}
+
+static void end_progress(progress *p)
+{
+    if (p->shown) fprintf(stderr, "\r\033[K");
+    p->shown = 0;
 }
 
 /* ---- stats ---- */
@@ -213,7 +315,13 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
     double ms_all = 0.0;
     int rc = 0, written = 0;
     char name[4200];
+    progress prog = {now_s(), 0.0, 0, nframes, 0};
+    if (!o->quiet && isatty(STDERR_FILENO)) {
+        o->s.progress = show_progress;
+        o->s.progress_user = &prog;
+    }
     for (int f = 0; f < nframes && !rc; f++) {
+        prog.frame = f;
         o->s.azimuth = az0 + 360.0 * f / nframes;
         vs_image img = {0, 0, NULL};
         vs_status st = vs_render(ctx, vol, &o->s, &img, &stats);
@@ -242,6 +350,8 @@ static int render_and_write(vs_context *ctx, const vs_volume *vol, cli_opts *o)
             frames[0] = img;
         }
     }
+    end_progress(&prog);
+    o->s.progress = NULL;
     if (sequence && rc) remove_frames(o, written);
     if (!rc && trace) {
         vs_status st = vs_trace_write(ctx, trace, o->trace_path);
@@ -326,6 +436,13 @@ static int cmd_render(int argc, char **argv)
         return rc;
     }
 
+    if (!o.quiet) geometry_notes(&o, vol);
+    /* the default view, fixed before a turntable turns the azimuth from it */
+    if (o.s.view == VS_VIEW_AUTO) {
+        double m[12];
+        o.s.view = vs_volume_affine(vol, m) ? VS_VIEW_ANTERIOR : VS_VIEW_ANGLES;
+    }
+
     /* --tf: the .1dt format needs the volume's value range, so load it now. */
     vs_tf_point *tf = NULL;
     if (o.tf_path) {
@@ -362,6 +479,11 @@ static int cmd_render(int argc, char **argv)
         if (o.s.iso_lo - w > hi || o.s.iso_hi + w < lo)
             fprintf(stderr, "vsplat: note: iso-range %g:%g lies outside the data range %g..%g; the image will be blank\n",
                     o.s.iso_lo, o.s.iso_hi, lo, hi);
+        else if (o.s.iso_lo + w <= lo && o.s.iso_hi - w >= hi)
+            fprintf(stderr,
+                    "vsplat: note: iso-range %g:%g (ramp %g) takes in the whole data range %g..%g; every voxel is "
+                    "opaque and the image shows the volume's box\n",
+                    o.s.iso_lo, o.s.iso_hi, w, lo, hi);
     }
 
     rc = render_and_write(ctx, vol, &o);
@@ -405,6 +527,22 @@ static int cmd_info(int argc, char **argv)
     printf("voxels: %llu\n", (unsigned long long)d[0] * (unsigned long long)d[1] * (unsigned long long)d[2]);
     printf("default_iso: %.9g\n", vs_volume_default_iso(vol));
     printf("analytic: %s\n", vs_volume_has_analytic(vol) ? "yes" : "no");
+    double m[12];
+    if (vs_volume_affine(vol, m)) {
+        char code[4];
+        int oblique, sheared;
+        orientation_code(m, code, &oblique, &sheared);
+        printf("orientation: %s%s%s\n", code, oblique ? " (oblique: nearest axes)" : "",
+               sheared ? " (sheared: rendered as the transform says)" : "");
+    } else {
+        printf("orientation: none (assumed RAS: x right, y anterior, z superior)\n");
+    }
+    printf("transform:");
+    for (int r = 0; r < 3; r++)
+        printf(" %.9g %.9g %.9g %.9g%s", m[4 * r] + 0.0, m[4 * r + 1] + 0.0, m[4 * r + 2] + 0.0, m[4 * r + 3] + 0.0,
+               r < 2 ? ";" : "\n");
+    fflush(stdout);
+    geometry_notes(&o, vol);
     vs_volume_release(vol);
     vs_context_release(ctx);
     return 0;

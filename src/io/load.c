@@ -148,7 +148,10 @@ vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_option
         return st;
     }
     if (opt->has_spacing)
-        for (int a = 0; a < 3; a++) v->spacing[a] = opt->spacing[a];
+        for (int a = 0; a < 3; a++) { /* the transform keeps its directions */
+            for (int r = 0; r < 3; r++) v->affine[r][a] *= opt->spacing[a] / v->spacing[a];
+            v->spacing[a] = opt->spacing[a];
+        }
     vs_volume_update_range(v);
     *out = v;
     return VS_OK;

@@ -9,7 +9,12 @@
  * scl_slope that is finite, non-zero and not the identity (1,0) turns the
  * data into f32 = slope*v + inter.  Only the first 3-D volume of a 4-D+ file
  * is read.  Spacing is |pixdim[1..3]| as stored: 0 or NaN on an axis with
- * more than one voxel is an error (niftiio would silently make it 1). */
+ * more than one voxel is an error (niftiio would silently make it 1).
+ * Orientation (index to RAS mm), as the NIfTI-1 standard orders it: the
+ * sform if sform_code > 0, else the qform if qform_code > 0, else none
+ * (pixdim only); a transform that is singular or not finite counts as
+ * absent, so the next one is tried.  With one, the spacing is its column
+ * lengths. */
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
@@ -170,6 +175,20 @@ static double nifti_value(const void *p, int dt, size_t i)
     }
 }
 
+static int try_affine(vs_volume *v, const mat44 *m)
+{
+    double a[3][4];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) a[r][c] = m->m[r][c];
+    return vs_volume_set_affine(NULL, v, a) == VS_OK;
+}
+
+static void set_orientation(vs_volume *v, const nifti_image *nim)
+{
+    if (nim->sform_code > 0 && try_affine(v, &nim->sto_xyz)) return;
+    if (nim->qform_code > 0) try_affine(v, &nim->qto_xyz);
+}
+
 vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
 {
     uint64_t fsize;
@@ -276,6 +295,7 @@ vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
             f[i] = (float)(scale ? slope * x + inter : x);
         }
     }
+    set_orientation(v, nim);
     st = VS_OK;
 done:
     if (tmp) free(tmp);

@@ -2,7 +2,12 @@
  * first without data, so absurd sizes are refused before Teem allocates;
  * then the whole file is loaded.  uchar/short/ushort/float keep their type,
  * other scalar types become f32.  Spacing per axis from nrrdSpacingCalculate
- * (axis spacing, or the length of the space direction), else 1. */
+ * (axis spacing, or the length of the space direction), else 1.
+ * Orientation from an anatomical `space` (RAS, LAS, LPS, or one of them
+ * with time) with a `space direction` for each of three axes and the
+ * `space origin` (0 if absent): converted to RAS by negating the left and
+ * posterior components.  Other spaces ("scanner-xyz", "3D-right-handed",
+ * ...) say nothing about the anatomy: spacing only. */
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
@@ -73,6 +78,25 @@ static double nrrd_value(const void *p, int type, size_t i)
     case nrrdTypeFloat: return ((const float *)p)[i];
     default: return ((const double *)p)[i];
     }
+}
+
+static void set_orientation(vs_volume *v, const Nrrd *nrrd)
+{
+    double flip[3] = {1, 1, 1};
+    switch (nrrd->space) {
+    case nrrdSpaceRightAnteriorSuperior: case nrrdSpaceRightAnteriorSuperiorTime: break;
+    case nrrdSpaceLeftAnteriorSuperior: case nrrdSpaceLeftAnteriorSuperiorTime: flip[0] = -1; break;
+    case nrrdSpaceLeftPosteriorSuperior: case nrrdSpaceLeftPosteriorSuperiorTime: flip[0] = flip[1] = -1; break;
+    default: return;
+    }
+    if (nrrd->dim != 3 || nrrd->spaceDim < 3) return;
+    double m[3][4];
+    for (int r = 0; r < 3; r++) {
+        double o = nrrd->spaceOrigin[r];
+        m[r][3] = flip[r] * (isfinite(o) ? o : 0.0);
+        for (int c = 0; c < 3; c++) m[r][c] = flip[r] * nrrd->axis[c].spaceDirection[r];
+    }
+    vs_volume_set_affine(NULL, v, m); /* NaN (no direction) or singular: spacing only */
 }
 
 vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
@@ -191,6 +215,7 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
     }
     st = vs_load_alloc(ctx, path, type, dims, spacing, &v);
     if (st != VS_OK) goto done;
+    set_orientation(v, nrrd);
     size_t n = (size_t)dims[0] * dims[1] * dims[2];
     if (type != VS_F32 || nrrd->type == nrrdTypeFloat) {
         memcpy(v->data, nrrd->data, n * elem);

@@ -150,6 +150,17 @@ static void to_gray(const stack *s, const void *src, int ch, void *dst)
     }
 }
 
+static const char *pix_name(vs_pixel_type p)
+{
+    switch (p) {
+    case VS_PIX_U8: return "8-bit";
+    case VS_PIX_I16: return "16-bit signed";
+    case VS_PIX_U16: return "16-bit";
+    case VS_PIX_F32: return "floating-point";
+    default: return "of another sample type";
+    }
+}
+
 /* Reads page `page` of reader `r` into slice z. */
 static vs_status stack_add(stack *s, vs_oiio_reader *r, int page, int z, const char *slice)
 {
@@ -171,10 +182,9 @@ static vs_status stack_add(stack *s, vs_oiio_reader *r, int page, int z, const c
     int ch = info->channels;
     if (info->width != s->width || info->height != s->height || info->native != s->pix) {
         st = vs_set_error(s->ctx, VS_ERR_FORMAT,
-                          "%s: slice %d (%s) is %dx%d of sample type %d, expected %dx%d of type %d "
-                          "like the first",
-                          s->path, z, slice, info->width, info->height, (int)info->native, s->width,
-                          s->height, (int)s->pix);
+                          "%s: not one slice series: slice %d (%s) is %dx%d %s, but the first slice is %dx%d %s",
+                          s->path, z + 1, slice, info->width, info->height, pix_name(info->native), s->width,
+                          s->height, pix_name(s->pix));
         free(info);
         return st;
     }
@@ -349,7 +359,17 @@ vs_status vs_load_folder(vs_context *ctx, const char *path, vs_volume **out)
             vs_set_error(ctx, st, "%s: %s", path, err);
             break;
         }
-        st = stack_add(&s, r, 0, (int)z, names[z]);
+        /* one page per file: a multi-page TIFF among the slices would
+         * otherwise give only its first page */
+        int pages = 1;
+        st = io->count_pages(r, 2, &pages, err, sizeof err);
+        if (st != VS_OK) vs_set_error(ctx, st, "%s: %s", path, err);
+        else if (pages > 1)
+            st = vs_set_error(ctx, VS_ERR_FORMAT,
+                              "%s: not one slice series: %s has several pages (a multi-page stack: give that "
+                              "file itself, not the folder)",
+                              path, names[z]);
+        if (st == VS_OK) st = stack_add(&s, r, 0, (int)z, names[z]);
         io->close(r);
     }
     for (size_t i = 0; i < n; i++) free(names[i]);
@@ -548,7 +568,14 @@ vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out)
             vs_set_error(ctx, st, "%s: %s", path, err);
             break;
         }
-        st = stack_add(&s, r, 0, (int)z, m[z].name);
+        int pages = 1;
+        st = io->count_pages(r, 2, &pages, err, sizeof err);
+        if (st != VS_OK) vs_set_error(ctx, st, "%s: %s", path, err);
+        else if (pages > 1)
+            st = vs_set_error(ctx, VS_ERR_FORMAT,
+                              "%s: not one slice series: member %s has several pages (a multi-page stack)", path,
+                              m[z].name);
+        if (st == VS_OK) st = stack_add(&s, r, 0, (int)z, m[z].name);
         io->close(r);
     }
     free(buf);

@@ -42,6 +42,13 @@ static pthread_once_t lsan_once = PTHREAD_ONCE_INIT;
 #define VS_INSTALL_MODULEDIR "/usr/local/lib/vsplat-modules"
 #endif
 
+/* The module folder of the prefix a program linked with the installed
+ * libvsplat.a found it in: defined by a one-line source that the CMake
+ * package (vsplatConfig.cmake) adds to such programs, so that an install
+ * made with `cmake --install --prefix P` works wherever the program lives;
+ * absent (NULL) otherwise. */
+extern const char vs_oiio_install_moduledir[] __attribute__((weak));
+
 /* Try one path: the table, or NULL with the reason appended to `why`. */
 static const vs_oiio_api *try_open(const char *path, void **handle, char *why, size_t cap)
 {
@@ -102,12 +109,19 @@ const vs_oiio_api *vs_oiio(vs_context *ctx)
         if (access(path, R_OK)) continue;
         if ((ctx->oiio = try_open(path, &ctx->oiio_handle, why, sizeof why))) return ctx->oiio;
     }
+    const char *pkg = vs_oiio_install_moduledir;
+    if (pkg && pkg[0]) {
+        snprintf(path, sizeof path, "%s/%s", pkg, VS_OIIO_MODULE_NAME);
+        if (!access(path, R_OK) && (ctx->oiio = try_open(path, &ctx->oiio_handle, why, sizeof why)))
+            return ctx->oiio;
+    }
     snprintf(path, sizeof path, "%s/%s", VS_INSTALL_MODULEDIR, VS_OIIO_MODULE_NAME);
     if (!access(path, R_OK) && (ctx->oiio = try_open(path, &ctx->oiio_handle, why, sizeof why))) return ctx->oiio;
     vs_set_error(ctx, VS_ERR_IO,
                  "image I/O: cannot load the OpenImageIO module %s (looked in vsplat-modules/ in, one and two "
-                 "folders above, and under ../%s from %s, and in %s%s%s); set %s to its path",
-                 VS_OIIO_MODULE_NAME, VS_INSTALL_LIBDIR, dir[0] ? dir : "(unknown)", VS_INSTALL_MODULEDIR,
+                 "folders above, and under ../%s from %s, and in %s%s%s%s%s); set %s to its path",
+                 VS_OIIO_MODULE_NAME, VS_INSTALL_LIBDIR, dir[0] ? dir : "(unknown)", pkg && pkg[0] ? pkg : "",
+                 pkg && pkg[0] ? " and " : "", VS_INSTALL_MODULEDIR,
                  why[0] ? ": " : "", why, VS_OIIO_MODULE_ENV);
     return NULL;
 }
