@@ -101,6 +101,8 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
     if (vs_load_ends_with(path, ".nrrd") || vs_load_ends_with(path, ".nhdr"))
         return vs_load_nrrd(ctx, path, out);
     if (vs_load_ends_with(path, ".den")) return vs_load_den(ctx, path, out);
+    if (vs_load_ends_with(path, ".mha") || vs_load_ends_with(path, ".mhd"))
+        return vs_load_metaimage(ctx, path, out);
     if (vs_load_ends_with(path, ".dcm")) return vs_load_dicom(ctx, path, opt->series, out);
     if (vs_load_ends_with(path, ".tar")) return vs_load_tar(ctx, path, out);
     if (vs_load_ends_with(path, ".tif") || vs_load_ends_with(path, ".tiff") ||
@@ -121,7 +123,7 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
     if (vs_dicom_sniff(path)) return vs_load_dicom(ctx, path, opt->series, out);
     return vs_set_error(ctx, VS_ERR_UNSUPPORTED,
                         "%s: unknown volume format (expected .nii, .nii.gz, .hdr/.img, .nrrd, "
-                        ".nhdr, DICOM, .den, .tif, .tiff, .png, .tar, .raw, .raw.gz "
+                        ".nhdr, .mha, .mhd, DICOM, .den, .tif, .tiff, .png, .tar, .raw, .raw.gz "
                         "or a folder of slices)",
                         path);
 }

@@ -25,6 +25,8 @@ vs_status vs_load_dicom(vs_context *ctx, const char *path, const char *series, v
 int vs_dicom_sniff(const char *path);
 /* The folder holds at least one file that starts like DICOM. */
 int vs_dicom_folder(const char *dir);
+/* ITK MetaImage: .mha (header and data) or .mhd (data in ElementDataFile). */
+vs_status vs_load_metaimage(vs_context *ctx, const char *path, vs_volume **out);
 /* An uncompressed ustar archive of PNG/TIFF slices, in member order. */
 vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out);
 
