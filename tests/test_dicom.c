@@ -6,6 +6,7 @@
  * real CT series is checked against facts from its headers (MANIFEST.md). */
 #include "testutil.h"
 
+#include <dirent.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -221,6 +222,52 @@ static void test_real(vs_context *ctx)
     vs_volume_release(v);
 }
 
+/* tests/fuzz/regressions/dicom/: inputs of fuzz_dicom.c (first byte: how
+ * many equal parts, 1 to 3, the rest is cut into, one file each) that once
+ * ended the process; each must now load or fail with a message. */
+static void test_regressions(vs_context *ctx, const char *src)
+{
+    char rdir[4096], dir[4096], p[8300];
+    snprintf(rdir, sizeof rdir, "%s/tests/fuzz/regressions/dicom", src);
+    snprintf(dir, sizeof dir, "%s/dicom_regress", VSPLAT_TEST_BINARY_DIR);
+    mkdir(dir, 0755);
+    DIR *d = opendir(rdir);
+    if (!d) return;
+    struct dirent *e;
+    int n = 0;
+    while ((e = readdir(d))) {
+        if (e->d_name[0] == '.') continue;
+        snprintf(p, sizeof p, "%s/%s", rdir, e->d_name);
+        FILE *f = fopen(p, "rb");
+        if (!f) continue;
+        static unsigned char buf[1 << 20];
+        size_t size = fread(buf, 1, sizeof buf, f);
+        fclose(f);
+        if (size < 2) continue;
+        for (int i = 0; i < 3; i++) {
+            snprintf(p, sizeof p, "%s/f%d", dir, i);
+            unlink(p);
+        }
+        int files = buf[0] % 3 + 1;
+        size_t part = (size - 1) / (size_t)files;
+        for (int i = 0; i < files; i++) {
+            snprintf(p, sizeof p, "%s/f%d", dir, i);
+            FILE *o = fopen(p, "wb");
+            if (!o) continue;
+            fwrite(buf + 1 + part * (size_t)i, 1, i == files - 1 ? size - 1 - part * (size_t)i : part, o);
+            fclose(o);
+        }
+        vs_volume *v = (vs_volume *)1;
+        vs_status st = vs_volume_load(ctx, dir, NULL, &v);
+        CHECK(st == VS_OK || (v == NULL && *vs_last_error(ctx)), "regression %s: status %d, no message", e->d_name,
+              (int)st);
+        if (st == VS_OK) vs_volume_release(v);
+        n++;
+    }
+    closedir(d);
+    printf("%d fuzz regression inputs handled\n", n);
+}
+
 int main(void)
 {
     const char *src = getenv("VSPLAT_SOURCE_DIR");
@@ -235,6 +282,7 @@ int main(void)
     else
         test_written(ctx);
     test_real(ctx);
+    test_regressions(ctx, src);
     vs_context_release(ctx);
     /* without the module: an error that names it, not a crash */
     if (rc == 0 && vs_context_create(&ctx) == VS_OK) {

@@ -5,6 +5,7 @@
  * transform (DICOM's LPS turned into RAS). */
 #include "context.h"
 #include "dicom_adapter.h"
+#include "dicom_guard.h"
 #include "load.h"
 #include "load_common.h"
 
@@ -176,6 +177,17 @@ static vs_status check_slices(vs_context *ctx, const slice *s, int n, double nor
         if (h->rows != a->rows || h->cols != a->cols)
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: %dx%d pixels, but %s has %dx%d: not one volume", p,
                                 h->cols, h->rows, base_name(s[0].path), a->cols, a->rows);
+        /* no image codec packs more than 10000:1; refuse absurd sizes before
+         * allocating for them */
+        struct stat sb;
+        uint64_t need = (uint64_t)h->rows * (uint64_t)h->cols * (uint64_t)(h->bits_allocated > 8 ? h->bits_allocated / 8 : 1);
+        if (stat(p, &sb) == 0 && need > (uint64_t)sb.st_size * 10000u + (1u << 20))
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: %dx%d pixels cannot be stored in a file of %lld bytes", p,
+                                h->cols, h->rows, (long long)sb.st_size);
+        if (h->has_pixel_spacing && !(h->pixel_spacing[0] >= 1e-6 && h->pixel_spacing[0] <= 1e6 &&
+                                      h->pixel_spacing[1] >= 1e-6 && h->pixel_spacing[1] <= 1e6))
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: PixelSpacing %g\\%g is not a plausible size in mm", p,
+                                h->pixel_spacing[0], h->pixel_spacing[1]);
         if (h->bits_allocated != a->bits_allocated || h->pixel_representation != a->pixel_representation)
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: sample type differs from %s's", p,
                                 base_name(s[0].path));
@@ -267,39 +279,51 @@ static vs_status check_positions(vs_context *ctx, slice *s, int n, const double 
     return VS_OK;
 }
 
+/* Where decoded slices go: rescaled into the float volume. */
+typedef struct sink {
+    const slice *s;
+    float *dst;
+    size_t plane;
+} sink;
+
+static void take_slice(void *user, int z, const void *buf, vs_dicom_sample type)
+{
+    const sink *k = user;
+    const vs_dicom_header *h = &k->s[z].h;
+    float *o = k->dst + (size_t)z * k->plane;
+    for (size_t i = 0; i < k->plane; i++) {
+        double v;
+        switch (type) {
+        case VS_DCM_U8: v = ((const uint8_t *)buf)[i]; break;
+        case VS_DCM_I8: v = ((const int8_t *)buf)[i]; break;
+        case VS_DCM_U16: v = ((const uint16_t *)buf)[i]; break;
+        case VS_DCM_I16: v = ((const int16_t *)buf)[i]; break;
+        case VS_DCM_U32: v = ((const uint32_t *)buf)[i]; break;
+        default: v = ((const int32_t *)buf)[i]; break;
+        }
+        o[i] = (float)(v * h->slope + h->intercept);
+    }
+}
+
 /* Read every slice's pixels, rescaled, into a float volume. */
 static vs_status read_voxels(vs_context *ctx, const vs_dicom_api *api, const slice *s, int n, float *dst,
                              int *integral)
 {
     const size_t plane = (size_t)s[0].h.rows * (size_t)s[0].h.cols;
-    void *buf = malloc(plane * 4);
-    if (!buf) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", s[0].path);
+    char **paths = malloc((size_t)n * sizeof *paths);
+    if (!paths) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", s[0].path);
     *integral = 1;
     for (int z = 0; z < n; z++) {
-        const vs_dicom_header *h = &s[z].h;
-        char err[256] = "";
-        vs_dicom_sample type;
-        vs_status st = api->read_pixels(s[z].path, h->rows, h->cols, buf, plane * 4, &type, err, sizeof err);
-        if (st != VS_OK) {
-            free(buf);
-            return vs_set_error(ctx, st, "%s: %s", s[z].path, err);
-        }
-        if (h->slope != floor(h->slope) || h->intercept != floor(h->intercept)) *integral = 0;
-        float *o = dst + (size_t)z * plane;
-        for (size_t i = 0; i < plane; i++) {
-            double v;
-            switch (type) {
-            case VS_DCM_U8: v = ((const uint8_t *)buf)[i]; break;
-            case VS_DCM_I8: v = ((const int8_t *)buf)[i]; break;
-            case VS_DCM_U16: v = ((const uint16_t *)buf)[i]; break;
-            case VS_DCM_I16: v = ((const int16_t *)buf)[i]; break;
-            case VS_DCM_U32: v = ((const uint32_t *)buf)[i]; break;
-            default: v = ((const int32_t *)buf)[i]; break;
-            }
-            o[i] = (float)(v * h->slope + h->intercept);
-        }
+        paths[z] = s[z].path;
+        if (s[z].h.slope != floor(s[z].h.slope) || s[z].h.intercept != floor(s[z].h.intercept)) *integral = 0;
     }
-    free(buf);
+    sink k = {s, dst, plane};
+    char err[256] = "";
+    int failed = 0;
+    vs_status st = vs_dicom_pixels_guarded(api, paths, n, s[0].h.rows, s[0].h.cols, plane * 4, take_slice, &k,
+                                           &failed, err, sizeof err);
+    free(paths);
+    if (st != VS_OK) return vs_set_error(ctx, st, "%s: %s", s[failed].path, err);
     return VS_OK;
 }
 
@@ -379,6 +403,8 @@ static vs_status build(vs_context *ctx, const vs_dicom_api *api, const char *dir
     }
     const int dims[3] = {h->cols, h->rows, n};
     const double spacing[3] = {di, dj, sqrt(dot3(step, step))};
+    if (!(spacing[2] >= 1e-6 && spacing[2] <= 1e6))
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: slice spacing %g mm is not plausible", dir, spacing[2]);
     int64_t d64[3] = {dims[0], dims[1], dims[2]};
     st = vs_load_check_dims(ctx, dir, d64, 4, NULL);
     if (st != VS_OK) return st;
@@ -439,7 +465,9 @@ vs_status vs_load_dicom(vs_context *ctx, const char *path, const char *pick, vs_
     if (is_dir) dir = strdup(path);
     else {
         char err[256] = "";
-        vs_status st = api->read_header(path, &own, err, sizeof err);
+        char *one[1] = {(char *)path};
+        int failed;
+        vs_status st = vs_dicom_headers_guarded(api, one, 1, &own, &failed, err, sizeof err);
         if (st != VS_OK) return vs_set_error(ctx, st, "%s: %s", path, err);
         const char *slash = strrchr(path, '/');
         dir = slash ? strndup(path, (size_t)(slash - path) + (slash == path)) : strdup(".");
@@ -450,15 +478,17 @@ vs_status vs_load_dicom(vs_context *ctx, const char *path, const char *pick, vs_
     vs_status st = list_dicom(ctx, dir, &names, &nn);
     slice *s = st == VS_OK ? calloc((size_t)(nn ? nn : 1), sizeof *s) : NULL;
     if (st == VS_OK && !s) st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+    vs_dicom_header *hs = st == VS_OK ? calloc((size_t)(nn ? nn : 1), sizeof *hs) : NULL;
+    if (st == VS_OK && !hs) st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+    if (st == VS_OK) {
+        char err[256] = "";
+        int failed = 0;
+        vs_status r = vs_dicom_headers_guarded(api, names, nn, hs, &failed, err, sizeof err);
+        if (r != VS_OK) st = vs_set_error(ctx, r, "%s: looks like DICOM but cannot be read: %s", names[failed], err);
+    }
     int n = 0;
     for (int i = 0; st == VS_OK && i < nn; i++) {
-        char err[256] = "";
-        vs_dicom_header h;
-        vs_status r = api->read_header(names[i], &h, err, sizeof err);
-        if (r != VS_OK) {
-            st = vs_set_error(ctx, r, "%s: looks like DICOM but cannot be read: %s", names[i], err);
-            break;
-        }
+        const vs_dicom_header h = hs[i];
         /* DICOMDIR, reports, presentation states: no image, not a slice */
         if (!h.has_pixel_data && h.rows == 0 && h.cols == 0) continue;
         if (!h.has_pixel_data) {
@@ -488,6 +518,7 @@ vs_status vs_load_dicom(vs_context *ctx, const char *path, const char *pick, vs_
         if (m == 0) st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: its series has no image in the folder", path);
         else st = build(ctx, api, is_dir ? dir : path, s, m, out);
     }
+    free(hs);
     for (int i = 0; i < n; i++) free(s[i].path);
     for (int i = 0; i < nn; i++) free(names[i]);
     free(names);
