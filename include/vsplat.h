@@ -254,13 +254,18 @@ typedef struct vs_load_options {
     vs_endian endian;
     int has_spacing;
     double spacing[3];
+    /* DICOM: which series of a folder holding several, by SeriesInstanceUID
+     * or 1-based number in the list the error gives; NULL: the only one */
+    const char *series;
 } vs_load_options;
 /* Defaults; call it as vs_load_options_init(&o) (same scheme as the settings). */
 VS_API void vs_load_options_init_sized(vs_load_options *o, size_t struct_size);
 #define vs_load_options_init(o) vs_load_options_init_sized((o), sizeof(vs_load_options))
 
-/* Formats: .nii/.nii.gz (nifticlib), .nrrd/.nhdr (Teem), .tif/.tiff stacks,
- * folders and .tar of PNG slices (OpenImageIO), .den (VolPack), raw (+gzip). */
+/* Formats: .nii/.nii.gz (nifticlib), .nrrd/.nhdr (Teem), .mha/.mhd (ITK
+ * MetaImage), DICOM series (a folder or one of its files; GDCM module),
+ * .tif/.tiff stacks, folders and .tar of PNG slices (OpenImageIO), .den
+ * (VolPack), raw (+gzip). */
 VS_API vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
                                 vs_volume **out);
 /* Synthetic scenes: cube, sphere, ml[:N], head, cell (optionally NAME:N). */

@@ -35,15 +35,15 @@ static const size_t stats_ends[] = {
     END_T(iso_lo), END_T(iso_hi), END_T(ramp), END_T(pin_warning), END_T(bricks_culled),
     END_T(voxels_projected), END_T(voxels_tested), END_T(footprint_floats), END_T(pixels_classified),
     END_T(pixels_shaded), END_T(bytes_read), END_T(bytes_written)};
-static const size_t load_ends[] = {END_L(raw),  END_L(dims),        END_L(type),
-                                   END_L(endian), END_L(has_spacing), END_L(spacing)};
+static const size_t load_ends[] = {END_L(raw),         END_L(dims),    END_L(type),  END_L(endian),
+                                   END_L(has_spacing), END_L(spacing), END_L(series)};
 
 #define ROUND(n, T) (((n) + _Alignof(T) - 1) / _Alignof(T) * _Alignof(T))
 _Static_assert(ROUND(END_S(roll), vs_settings) == sizeof(vs_settings),
                "a field appended to vs_settings: add it to settings_ends");
 _Static_assert(ROUND(END_T(bytes_written), vs_stats) == sizeof(vs_stats),
                "a field appended to vs_stats: add it to stats_ends");
-_Static_assert(ROUND(END_L(spacing), vs_load_options) == sizeof(vs_load_options),
+_Static_assert(ROUND(END_L(series), vs_load_options) == sizeof(vs_load_options),
                "a field appended to vs_load_options: add it to load_ends");
 _Static_assert(offsetof(vs_settings, struct_size) == 0 && offsetof(vs_stats, struct_size) == 0 &&
                    offsetof(vs_load_options, struct_size) == 0,

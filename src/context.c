@@ -28,6 +28,7 @@ void vs_context_release(vs_context *ctx)
     free(ctx->shade_lut);
     vs_tile_scratch_release(ctx->scratch, ctx->nscratch);
     if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */
+    if (ctx->dicom_handle) dlclose(ctx->dicom_handle);
     free(ctx);
 }
 

@@ -10,7 +10,7 @@ struct vs_pool;
 struct vs_relevant_cache;
 struct vs_shade_lut;
 struct vs_context {
-    char error[512];
+    char error[1024]; /* room for a list of the series in a DICOM folder */
     struct vs_pool *pool;       /* created lazily, reused across frames        */
     int pool_threads;
     int pool_pin;
@@ -26,6 +26,8 @@ struct vs_context {
     int nscratch;
     const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */
     void *oiio_handle;                  /* its dlopen handle                     */
+    const struct vs_dicom_api *dicom;   /* DICOM module (GDCM), on first use     */
+    void *dicom_handle;
 };
 
 /* Free the workers' tile scratch (src/tile.c). */

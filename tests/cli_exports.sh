@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The library boundary: libvsplat.so exports exactly the functions that
 # include/vsplat.h declares (no internal symbol leaks, no declared function is
-# missing), and the image I/O module vsplat-oiio.so exports only the entry
-# point the library looks up with dlsym.
+# missing), and the adapter modules vsplat-oiio.so and vsplat-dicom.so (when
+# built) export only the entry point the library looks up with dlsym.
 # Usage: bash tests/cli_exports.sh PATH_TO_VSPLAT   (the build folder is its folder)
 set -euo pipefail
 
@@ -57,8 +57,16 @@ if [[ $mod != "vs_oiio_module_api " ]]; then
     echo "FAIL: vsplat-oiio.so should export vs_oiio_module_api only, exports: $mod"
     failed=1
 fi
+DCM=$BUILD/vsplat-modules/vsplat-dicom.so
+if [[ -f $DCM ]]; then
+    dcm=$(exports "$DCM" | tr '\n' ' ')
+    if [[ $dcm != "vs_dicom_module_api " ]]; then
+        echo "FAIL: vsplat-dicom.so should export vs_dicom_module_api only, exports: $dcm"
+        failed=1
+    fi
+fi
 if [[ $failed -eq 0 ]]; then
     echo "libvsplat.so exports the $n_decl functions include/vsplat.h declares and nothing else;" \
-        "vsplat-oiio.so exports its entry point only"
+        "the modules export their entry points only"
 fi
 exit $failed

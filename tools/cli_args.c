@@ -79,7 +79,7 @@ enum opt_id {
     O_TF, O_SIZE, O_VIEW, O_ZOOM, O_PERSPECTIVE, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
-    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
+    O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
     O_TURNTABLE, O_FPS, O_UP, O_ROLL
 };
 
@@ -137,6 +137,7 @@ static const opt_def opt_table[] = {
     {"--type", 1, O_TYPE, 1},
     {"--spacing", 1, O_SPACING, 1},
     {"--endian", 1, O_ENDIAN, 1},
+    {"--series", 1, O_SERIES, 1},
     {"--bits", 1, O_BITS, 0},
     {"--stats", 1, O_STATS, 0},
     {"--print-stats", 0, O_PRINT_STATS, 0},
@@ -397,6 +398,10 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_DIMS: sn->dims = 1; return parse_dims(v, &o->load, err, cap);
     case O_TYPE: sn->type = 1; return parse_type(v, &o->load, err, cap);
     case O_SPACING: sn->spacing = 1; return parse_spacing(v, &o->load, err, cap);
+    case O_SERIES:
+        if (!*v) return fail(err, cap, "--series: expected a SeriesInstanceUID or a series number");
+        o->load.series = v;
+        return 0;
     case O_ENDIAN:
         sn->endian = 1;
         if (!strcmp(v, "little")) o->load.endian = VS_ENDIAN_LITTLE;
@@ -573,12 +578,14 @@ void cli_render_usage(FILE *f)
             "       vsplat render --scene NAME[:N] [options] -o OUT\n"
             "\n"
             "input:\n"
-            "  INPUT                  .nii/.nii.gz, .nrrd/.nhdr, .tif/.tiff stack, folder or .tar of PNG\n"
-            "                         slices, .den, or raw: with --dims and --type, or named\n"
-            "                         NAME_XxYxZ_TYPE.raw (also .raw.gz, .bin, .vol; TYPE u8, i16, u16\n"
-            "                         or f32, optionally + le/be: e.g. ct_256x256x108_i16le.raw.gz).\n"
-            "                         Raw data and image stacks have no orientation (taken as RAS)\n"
-            "                         and, raw, no spacing (1,1,1 unless --spacing): a note says so\n"
+            "  INPUT                  .nii/.nii.gz, .nrrd/.nhdr, .mha/.mhd, DICOM series (folder or one\n"
+            "                         file), .tif/.tiff stack, folder or .tar of PNG slices, .den,\n"
+            "                         or raw: with --dims and --type, or named NAME_XxYxZ_TYPE.raw\n"
+            "                         (also .raw.gz, .bin, .vol; TYPE u8, i16, u16 or f32, optionally\n"
+            "                         + le/be: e.g. ct_256x256x108_i16le.raw.gz).  Raw data and image\n"
+            "                         stacks have no orientation (taken as RAS) and, raw, no spacing\n"
+            "                         (1,1,1 unless --spacing): a note says so\n"
+            "  --series UID|N         DICOM: the series to read from a folder holding several\n"
             "  --scene NAME[:N]       synthetic scene: cube, sphere, ml, head, cell (N voxels per side)\n"
             "  --dims X,Y,Z           raw input dimensions (with --type)\n"
             "  --type u8|i16|u16|f32  raw voxel type\n"
@@ -647,7 +654,7 @@ void cli_info_usage(FILE *f)
 {
     fprintf(f,
             "usage: vsplat info INPUT [--dims X,Y,Z --type u8|i16|u16|f32 [--endian little|big]]\n"
-            "                         [--spacing SX,SY,SZ]\n"
+            "                         [--spacing SX,SY,SZ] [--series UID|N]\n"
             "       vsplat info --scene NAME[:N]\n"
             "prints dims, type, spacing, range, voxels, default_iso, analytic, orientation (the\n"
             "nearest anatomical direction of each index axis, e.g. RAS or LPS, or none) and transform\n"

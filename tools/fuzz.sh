@@ -27,7 +27,8 @@ cmake -S "$ROOT" -B "$B" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -
     -DVSPLAT_SANITIZE=address,undefined,fuzzer-no-link -DVSPLAT_WERROR=ON >/dev/null
 targets=("$@")
 if [[ ${#targets[@]} -eq 0 ]]; then
-    targets=(nifti nrrd den raw stack tar)
+    targets=(nifti nrrd den raw stack tar metaimage)
+    [[ -f /usr/include/gdcm-3.0/gdcmReader.h ]] && targets+=(dicom)
     [[ -f $ROOT/src/io/tf_file.c ]] && targets+=(tf)
 fi
 cmake --build "$B" -j"$JOBS" --target "${targets[@]/#/fuzz_}" >/dev/null

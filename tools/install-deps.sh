@@ -12,6 +12,7 @@ PACKAGES=(
     libopenimageio-dev openimageio-tools
     libhwloc-dev libteem-dev libnifti2-dev zlib1g-dev
     libcjson-dev  # ParaView colour-map presets (--tf FILE.json)
+    libgdcm-dev python3-pydicom  # DICOM series (the module); tests write series with pydicom
     mricron-data  # the Colin27 demo head (ch2.nii.gz)
     libvolpack1-dev  # vsplat-bench peers: VolPack's octree renderer
     gnuplot-nox jq  # plots; tools/trace-png.sh reads traces with jq

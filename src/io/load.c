@@ -91,7 +91,8 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
     struct stat st;
     if (stat(path, &st) != 0)
         return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    if (S_ISDIR(st.st_mode)) return vs_load_folder(ctx, path, out);
+    if (S_ISDIR(st.st_mode))
+        return vs_dicom_folder(path) ? vs_load_dicom(ctx, path, opt->series, out) : vs_load_folder(ctx, path, out);
     if (opt->raw) return vs_load_raw(ctx, path, opt->dims, opt->type, opt->endian, out);
 
     static const char *const nifti[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz"};
@@ -100,6 +101,9 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
     if (vs_load_ends_with(path, ".nrrd") || vs_load_ends_with(path, ".nhdr"))
         return vs_load_nrrd(ctx, path, out);
     if (vs_load_ends_with(path, ".den")) return vs_load_den(ctx, path, out);
+    if (vs_load_ends_with(path, ".mha") || vs_load_ends_with(path, ".mhd"))
+        return vs_load_metaimage(ctx, path, out);
+    if (vs_load_ends_with(path, ".dcm")) return vs_load_dicom(ctx, path, opt->series, out);
     if (vs_load_ends_with(path, ".tar")) return vs_load_tar(ctx, path, out);
     if (vs_load_ends_with(path, ".tif") || vs_load_ends_with(path, ".tiff") ||
         vs_load_ends_with(path, ".png"))
@@ -115,10 +119,12 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
                                 path);
         return vs_load_raw(ctx, path, dims, type, endian, out);
     }
+    /* scanners name DICOM files anything (or nothing): known by content */
+    if (vs_dicom_sniff(path)) return vs_load_dicom(ctx, path, opt->series, out);
     return vs_set_error(ctx, VS_ERR_UNSUPPORTED,
                         "%s: unknown volume format (expected .nii, .nii.gz, .hdr/.img, .nrrd, "
-                        ".nhdr, .den, .tif, .tiff, .png, .tar, .raw, .raw.gz or a folder of "
-                        "slices)",
+                        ".nhdr, .mha, .mhd, DICOM, .den, .tif, .tiff, .png, .tar, .raw, .raw.gz "
+                        "or a folder of slices)",
                         path);
 }
 
