@@ -144,6 +144,16 @@ typedef struct vs_settings {
     /* profiling: record the frame's timeline into this trace (vs_trace_create;
      * NULL, the default: nothing is recorded and nothing costs) */
     vs_trace *trace;
+
+    /* sort-last rendering of one part of a volume (vsplat-mpi): with
+     * has_crop, only sheet points inside the index box [crop_lo - 0.5,
+     * crop_hi - 0.5) on each axis are composited; a face on the volume's
+     * own face does not clip.  Voxels outside the box are still splatted,
+     * so values near its faces are reconstructed as in the whole volume;
+     * boxes that tile the volume partition its points.
+     * 0 <= crop_lo < crop_hi <= dims.  Not for the ray caster. */
+    int has_crop;
+    int crop_lo[3], crop_hi[3];
 } vs_settings;
 
 typedef struct vs_stage_times {
@@ -250,6 +260,10 @@ VS_API int vs_volume_affine(const vs_volume *v, double m[12]);
 VS_API const char *vs_type_name(vs_type t);
 /* Recompute the value range after writing into vs_volume_data(). */
 VS_API void vs_volume_update_range(vs_volume *v);
+/* Declare the value range, lo <= hi, finite: a brick cut from a larger
+ * volume classifies with the whole volume's range (the transfer-function
+ * tables span it).  VS_ERR_INVALID_ARGUMENT otherwise. */
+VS_API vs_status vs_volume_set_range(vs_volume *v, double lo, double hi);
 VS_API void vs_volume_range(const vs_volume *v, double *lo, double *hi);
 /* Otsu threshold of the value histogram: a default iso-value. */
 VS_API double vs_volume_default_iso(const vs_volume *v);

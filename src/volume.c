@@ -153,6 +153,15 @@ void vs_volume_update_range(vs_volume *v)
     v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* the data may have changed */
 }
 
+vs_status vs_volume_set_range(vs_volume *v, double lo, double hi)
+{
+    if (!v || !isfinite(lo) || !isfinite(hi) || lo > hi) return VS_ERR_INVALID_ARGUMENT;
+    v->vmin = lo;
+    v->vmax = hi;
+    v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* tables keyed on the range */
+    return VS_OK;
+}
+
 double vs_volume_default_iso(const vs_volume *v)
 {
     if (!v) return 0.0;
