@@ -174,6 +174,16 @@ typedef struct vs_settings {
                                   along the viewing direction                    */
     double roll;               /* degrees: turns the picture clockwise about its
                                   centre, after `up` (default 0)                 */
+
+    /* sort-last rendering of one part of a volume (vsplat-mpi): with
+     * has_crop, only sheet points inside the index box [crop_lo - 0.5,
+     * crop_hi - 0.5) on each axis are composited; a face on the volume's
+     * own face does not clip.  Voxels outside the box are still splatted,
+     * so values near its faces are reconstructed as in the whole volume;
+     * boxes that tile the volume partition its points.
+     * 0 <= crop_lo < crop_hi <= dims.  Not for the ray caster. */
+    int has_crop;
+    int crop_lo[3], crop_hi[3];
 } vs_settings;
 
 typedef struct vs_stage_times {
@@ -282,13 +292,31 @@ VS_API vs_type vs_volume_type(const vs_volume *v);
  * m[0..2] * (i,j,k) + m[3].  Returns 1 when the file gave an orientation, 0
  * when it is assumed (diag(spacing): raw data, image stacks, scenes). */
 VS_API int vs_volume_affine(const vs_volume *v, double m[12]);
+/* Give a volume its index-to-world transform (same layout as above; RAS
+ * millimetres): a volume built in memory, or a brick cut from an oriented
+ * one (its translation moved to the brick's first voxel).  The spacing
+ * becomes the column lengths.  VS_ERR_INVALID_ARGUMENT for a zero, non-finite
+ * or singular matrix (the volume is left as it was). */
+VS_API vs_status vs_volume_set_transform(vs_context *ctx, vs_volume *v, const double m[12]);
 VS_API const char *vs_type_name(vs_type t);
 /* Recompute the value range after writing into vs_volume_data(). */
 VS_API void vs_volume_update_range(vs_volume *v);
+/* Declare the value range, lo <= hi, finite: a brick cut from a larger
+ * volume classifies with the whole volume's range (the transfer-function
+ * tables span it).  VS_ERR_INVALID_ARGUMENT otherwise. */
+VS_API vs_status vs_volume_set_range(vs_volume *v, double lo, double hi);
 VS_API void vs_volume_range(const vs_volume *v, double *lo, double *hi);
 /* Otsu threshold of the value histogram: a default iso-value. */
 VS_API double vs_volume_default_iso(const vs_volume *v);
 VS_API int vs_volume_has_analytic(const vs_volume *v);
+
+/* Where the camera of these settings looks from, in the volume's index
+ * coordinates: dir, the viewing direction (index units per view unit of
+ * depth), and for a perspective view eye, the eye point (NAN otherwise).
+ * For programs that order parts of a volume by visibility (vsplat-mpi).
+ * Returns the settings' error as vs_render would. */
+VS_API vs_status vs_view_in_index(vs_context *ctx, const vs_volume *vol, const vs_settings *s, double dir[3],
+                                  double eye[3]);
 
 /* ---- transfer-function files ---- */
 /* Read a transfer function into a malloc'ed array of piecewise-linear

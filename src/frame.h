@@ -50,6 +50,9 @@ typedef struct vs_frame {
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
     int clip_to_volume;              /* empty space is visible: pixels whose sheet
                                         point lies outside the volume stay clear */
+    double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */
+    int clip_hi_open[3];             /* 1: a point on clip_hi is outside (a crop
+                                        face shared with the next brick)       */
 
     /* per brick of relevant voxels: view-space bounds of its voxel centres
      * (x, y pixels; z view units), for binning and brick-level culling */

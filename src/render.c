@@ -343,7 +343,16 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
      * the post-classified pipelines need the seam layer too (paper §4.3) */
     int seam = s->seam >= 0 ? s->seam : (int)ceil(s->kernel_radius);
     if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
-    F.clip_to_volume = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
+    /* a crop face inside the volume clips; the volume's own faces clip only
+     * when empty space is visible, as without a crop box */
+    const int zero_vis = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
+    F.clip_to_volume = zero_vis || s->has_crop;
+    for (int a = 0; a < 3; a++) {
+        const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
+        F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : zero_vis ? -0.5 : -INFINITY;
+        F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : zero_vis ? vol->dims[a] - 0.5 : INFINITY;
+        F.clip_hi_open[a] = cut_hi;
+    }
     int rebuilt = 0;
     if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
     double t_rel = vs_now_ms();
@@ -526,6 +535,15 @@ vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *se
     vs_stats st_full, *st = stats ? &st_full : NULL;
     rc = check_settings(ctx, s);
     if (rc != VS_OK) return rc;
+    if (s->has_crop) {
+        if (s->pipeline == VS_PIPELINE_RAYCAST)
+            return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "the crop box is not supported by the ray caster");
+        for (int a = 0; a < 3; a++)
+            if (!(s->crop_lo[a] >= 0 && s->crop_lo[a] < s->crop_hi[a] && s->crop_hi[a] <= vol->dims[a]))
+                return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
+                                    "crop box %d..%d on axis %d must lie in 0..%d and not be empty", s->crop_lo[a],
+                                    s->crop_hi[a], a, vol->dims[a]);
+    }
     if (s->pipeline == VS_PIPELINE_RAYCAST) {
         const double t0 = vs_now_ms();
         rc = vs_raycast_render(ctx, vol, s, out, st);

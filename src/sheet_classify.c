@@ -9,19 +9,22 @@
 
 /* With a transfer function that makes value 0 visible, sheet pixels whose
  * slab centre lies outside the volume (where nothing was splatted, so q = 0)
- * must stay transparent, as they are for the ray caster. */
+ * must stay transparent, as they are for the ray caster; with a crop box,
+ * those outside the box (another brick composites them). */
 static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
 {
     const vs_frame *F = t->F;
     const vs_camera *cam = &F->cam;
     const double z = (k + 0.5) * F->fp.slab;
-    const double lim[3] = {F->rel->dims[0] - 0.5, F->rel->dims[1] - 0.5, F->rel->dims[2] - 0.5};
+    const double *lo = F->clip_lo, *hi = F->clip_hi;
+    const int *open = F->clip_hi_open;
     for (int y = r->y0; y < r->y1; y++)
         for (int x = r->xa[y]; x < r->xb[y]; x++) {
             double v[3] = {x + t->ox, y + t->oy, z}, idx[3];
             vs_camera_view_to_index(cam, v, idx);
-            int inside = idx[0] >= -0.5 && idx[0] <= lim[0] && idx[1] >= -0.5 && idx[1] <= lim[1] &&
-                         idx[2] >= -0.5 && idx[2] <= lim[2];
+            int inside = 1;
+            for (int a = 0; a < 3; a++)
+                inside &= idx[a] >= lo[a] && (open[a] ? idx[a] < hi[a] : idx[a] <= hi[a]);
             if (!inside) alpha[(y - 1) * t->tw + (x - 1)] = 0.0f;
         }
 }

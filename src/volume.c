@@ -120,6 +120,12 @@ vs_status vs_volume_set_affine(vs_context *ctx, struct vs_volume *v, const doubl
     v->has_orientation = 1;
     return VS_OK;
 }
+vs_status vs_volume_set_transform(vs_context *ctx, vs_volume *v, const double m[12])
+{
+    if (!v || !m) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume transform: NULL argument");
+    const double a[3][4] = {{m[0], m[1], m[2], m[3]}, {m[4], m[5], m[6], m[7]}, {m[8], m[9], m[10], m[11]}};
+    return vs_volume_set_affine(ctx, v, a);
+}
 int vs_volume_affine(const vs_volume *v, double m[12])
 {
     if (!m) return 0;
@@ -151,6 +157,15 @@ void vs_volume_update_range(vs_volume *v)
     v->vmin = lo;
     v->vmax = hi;
     v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* the data may have changed */
+}
+
+vs_status vs_volume_set_range(vs_volume *v, double lo, double hi)
+{
+    if (!v || !isfinite(lo) || !isfinite(hi) || lo > hi) return VS_ERR_INVALID_ARGUMENT;
+    v->vmin = lo;
+    v->vmax = hi;
+    v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* tables keyed on the range */
+    return VS_OK;
 }
 
 double vs_volume_default_iso(const vs_volume *v)

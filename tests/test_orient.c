@@ -431,6 +431,36 @@ int main(void)
         vs_volume_release(vf);
     }
 
+    /* vs_view_in_index and vs_volume_set_transform: the viewing direction in
+     * index units per view unit (the smallest spacing), through a flip; the
+     * perspective eye on the line through the centre against it */
+    {
+        vs_volume *v = NULL;
+        const int dims[3] = {10, 20, 30};
+        const double sp[3] = {1, 2, 3};
+        CHECK(vs_volume_create(ctx, VS_U8, dims, sp, &v) == VS_OK, "create: %s", vs_last_error(ctx));
+        vs_settings s;
+        vs_settings_init(&s);
+        s.view = VS_VIEW_ANGLES;
+        s.azimuth = 90.0; /* world direction -x */
+        double dir[3], eye[3];
+        CHECK(vs_view_in_index(ctx, v, &s, dir, eye) == VS_OK, "view: %s", vs_last_error(ctx));
+        CHECK(fabs(dir[0] + 1.0) < 1e-12 && fabs(dir[1]) < 1e-12 && fabs(dir[2]) < 1e-12 && isnan(eye[0]),
+              "az 90 unoriented: dir %g %g %g", dir[0], dir[1], dir[2]);
+        const double flip[12] = {-1, 0, 0, 9, 0, 2, 0, 0, 0, 0, 3, 0};
+        CHECK(vs_volume_set_transform(ctx, v, flip) == VS_OK, "transform: %s", vs_last_error(ctx));
+        s.elevation = 0.0;
+        s.perspective_fov = 30.0;
+        CHECK(vs_view_in_index(ctx, v, &s, dir, eye) == VS_OK, "view: %s", vs_last_error(ctx));
+        CHECK(fabs(dir[0] - 1.0) < 1e-12 && fabs(dir[1]) < 1e-12 && fabs(dir[2]) < 1e-12,
+              "az 90, x stored reversed: dir %g %g %g (want 1 0 0)", dir[0], dir[1], dir[2]);
+        CHECK(eye[0] < 0.0 && fabs(eye[1] - 9.5) < 1e-9 && fabs(eye[2] - 14.5) < 1e-9,
+              "perspective eye %g %g %g: not before the centre against dir", eye[0], eye[1], eye[2]);
+        const double singular[12] = {1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0};
+        CHECK(vs_volume_set_transform(ctx, v, singular) != VS_OK, "a singular transform was taken");
+        vs_volume_release(v);
+    }
+
     for (int i = 0; i < 6; i++) vs_volume_release(vol[i]);
     vs_volume_release(bare);
     vs_context_release(ctx);

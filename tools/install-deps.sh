@@ -17,6 +17,7 @@ PACKAGES=(
     libvolpack1-dev  # vsplat-bench peers: VolPack's octree renderer
     gnuplot-nox jq  # plots; tools/trace-png.sh reads traces with jq
     clang libclang-rt-14-dev valgrind  # sanitizers, fuzzers, memcheck
+    libopenmpi-dev openmpi-bin  # vsplat-mpi (optional: the rest builds without it)
 )
 
 missing=()

@@ -1,0 +1,27 @@
+/* vsplat-mpi: sort-last compositing of the ranks' partial images. */
+#ifndef VSPLAT_MPI_COMPOSITE_H
+#define VSPLAT_MPI_COMPOSITE_H
+
+#include "vsplat.h"
+
+#include <mpi.h>
+#include <stdint.h>
+
+/* The pixels a partial image touches (alpha > 0): [x0, x1) x [y0, y1),
+ * empty when x0 == x1. */
+typedef struct mpi_rect {
+    int x0, y0, x1, y1;
+} mpi_rect;
+
+mpi_rect mpi_touched(const vs_image *img);
+
+/* Depth-ordered gather: every rank sends the premultiplied RGBA of its
+ * touched rectangle to rank 0, which composites them front to back in
+ * `order` (the same on every rank) over the background and returns the
+ * straight image in *out (rank 0 only).  A fixed order, so the image does
+ * not depend on timing.  *bytes_sent: what this rank sent.  Collective;
+ * returns 0, or 1 on rank 0 when out of memory (the others still complete). */
+int mpi_composite_gather(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
+                         vs_image *out, uint64_t *bytes_sent);
+
+#endif
