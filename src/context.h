@@ -4,6 +4,7 @@
 #define VS_CONTEXT_H
 
 #include "vsplat.h"
+#include <stdatomic.h>
 #include <stdint.h>
 
 struct vs_pool;
@@ -26,6 +27,9 @@ struct vs_context {
     int nscratch;
     const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */
     void *oiio_handle;                  /* its dlopen handle                     */
+    atomic_int busy;                    /* 1 while vs_render runs: a second
+                                           thread's vs_render gets VS_ERR_BUSY
+                                           instead of racing on the caches */
 };
 
 /* Free the workers' tile scratch (src/tile.c). */
