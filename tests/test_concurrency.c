@@ -14,7 +14,6 @@
 #include "testutil.h"
 
 #include <pthread.h>
-#include <stdatomic.h>
 
 #define NCTX 4
 
@@ -98,7 +97,7 @@ typedef struct gate {
     int inside; /* the render reached its first callback */
     int acted;  /* the other thread did its part */
     int done;   /* the render returned (without a callback, worker 0 got no tile) */
-    atomic_int cancel;
+    int cancel; /* set by the other thread (under mu, as the callback reads it) */
     int calls;
 } gate;
 
@@ -112,16 +111,16 @@ static int gated_progress(void *user, double fraction)
         pthread_cond_broadcast(&g->cv);
         while (!g->acted) pthread_cond_wait(&g->cv, &g->mu);
     }
+    const int cancel = g->cancel;
     pthread_mutex_unlock(&g->mu);
-    return atomic_load(&g->cancel);
+    return cancel;
 }
 
 static void gate_init(gate *g)
 {
     pthread_mutex_init(&g->mu, NULL);
     pthread_cond_init(&g->cv, NULL);
-    g->inside = g->acted = g->calls = g->done = 0;
-    atomic_init(&g->cancel, 0);
+    g->inside = g->acted = g->calls = g->done = g->cancel = 0;
 }
 
 /* 1 once the render waits in its callback, 0 if it returned without */
@@ -134,9 +133,10 @@ static int gate_wait_inside(gate *g)
     return inside;
 }
 
-static void gate_release(gate *g)
+static void gate_release(gate *g, int cancel)
 {
     pthread_mutex_lock(&g->mu);
+    g->cancel = cancel;
     g->acted = 1;
     pthread_cond_broadcast(&g->cv);
     pthread_mutex_unlock(&g->mu);
@@ -167,8 +167,7 @@ static void *canceller(void *arg)
 {
     gate *g = arg;
     if (!gate_wait_inside(g)) return NULL;
-    atomic_store(&g->cancel, 1);
-    gate_release(g);
+    gate_release(g, 1);
     return NULL;
 }
 
@@ -243,7 +242,7 @@ static void check_busy(const vs_image *ref)
     vs_status st = vs_render(c, vol, &s, &img, NULL);
     CHECK(st == VS_ERR_BUSY, "second thread on a rendering context got %s", vs_status_string(st));
     CHECK(img.rgba == NULL && img.width == 0, "busy render left an image");
-    gate_release(&g);
+    gate_release(&g, 0);
     pthread_join(tr, NULL);
     CHECK(j.st == VS_OK && same_image(&j.img, &ref[2]), "the first thread's frame after the refusal: %s",
           vs_status_string(j.st));
