@@ -7,9 +7,25 @@
  * so settings can grow without breaking programs built against an older
  * header: docs/ABI.md), every call returns a vs_status, and the
  * context keeps a human-readable last-error message.  The library never prints.
- * A context keeps caches between calls (worker pool, relevant voxels, shading
- * tables), so it serves one call at a time: use one context per thread that
- * renders.
+ *
+ * Threads.  The library has no global mutable state, so:
+ *  - separate contexts may be used from separate threads at the same time;
+ *  - one context serves one call at a time (it keeps the worker pool, the
+ *    relevant-voxel list, the shading tables, the image module and the
+ *    last-error message): use one context per thread, or serialise the
+ *    calls.  vs_render on a context that is already rendering returns
+ *    VS_ERR_BUSY at once (vs_last_error then still describes the other
+ *    call); other misuse is not detected;
+ *  - a volume may be rendered by several contexts at once: vs_render only
+ *    reads it, and every cache keyed on it lives in the rendering context.
+ *    Nothing may write into it (vs_volume_data, the buffer of
+ *    vs_volume_wrap, vs_volume_update_range) or release it meanwhile;
+ *  - a vs_trace serves one vs_render at a time; transfer-function arrays and
+ *    images are plain memory, read-only while shared;
+ *  - the progress callback runs on the thread that called vs_render, and a
+ *    flag it returns may be set by any other thread: returning non-zero
+ *    cancels the frame (VS_ERR_CANCELLED) and leaves the context usable.
+ * tests/test_concurrency.c checks these promises (and runs under TSan).
  */
 #ifndef VSPLAT_H
 #define VSPLAT_H
@@ -44,7 +60,8 @@ typedef enum vs_status {
     VS_ERR_TOO_LARGE = 5,        /* sizes overflow or exceed VS_MAX_* limits */
     VS_ERR_UNSUPPORTED = 6,      /* valid request this build cannot serve */
     VS_ERR_CANCELLED = 7,        /* the progress callback asked to stop */
-    VS_ERR_INTERNAL = 8
+    VS_ERR_INTERNAL = 8,
+    VS_ERR_BUSY = 9              /* the context is serving another thread's call */
 } vs_status;
 
 typedef enum vs_type { VS_U8 = 0, VS_I16 = 1, VS_U16 = 2, VS_F32 = 3 } vs_type;
@@ -98,7 +115,8 @@ typedef struct vs_tf_point {
 } vs_tf_point;
 
 /* Progress callback: fraction in [0,1]; return non-zero to cancel.
- * Always called on the thread that called vs_render(). */
+ * Always called on the thread that called vs_render() (between tiles; with
+ * several workers, only for tiles that thread renders). */
 typedef int (*vs_progress_fn)(void *user, double fraction);
 
 /* Fields are only ever appended.  Fill it with vs_settings_init(), never by
@@ -282,6 +300,21 @@ VS_API vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load
 VS_API vs_status vs_volume_scene(vs_context *ctx, const char *spec, vs_volume **out);
 VS_API vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
                                   const double spacing[3], vs_volume **out);
+/* A volume over memory the caller owns, without a copy: `data` holds
+ * dims[0]*dims[1]*dims[2] voxels of `type`, x fastest, then y, then z,
+ * aligned to the voxel size.  strides_bytes (NULL: contiguous) must be the
+ * contiguous ones, {size, size*dims[0], size*dims[0]*dims[1]} (an axis of
+ * extent 1 may have any stride): other layouts are VS_ERR_UNSUPPORTED, as
+ * the renderer reads the voxels as one dense array; copy them first.  The
+ * value range is computed here: after writing into the buffer call
+ * vs_volume_update_range.  The buffer must stay valid and unchanged while
+ * a frame renders it.  vs_volume_release calls release(release_user, data)
+ * exactly once (release may be NULL); on failure nothing is called and the
+ * buffer stays the caller's. */
+typedef void (*vs_release_fn)(void *user, void *data);
+VS_API vs_status vs_volume_wrap(vs_context *ctx, vs_type type, const int dims[3], const size_t strides_bytes[3],
+                                const double spacing[3], void *data, vs_release_fn release, void *release_user,
+                                vs_volume **out);
 VS_API void vs_volume_release(vs_volume *v);
 VS_API void *vs_volume_data(vs_volume *v); /* x fastest, then y, then z */
 VS_API void vs_volume_dims(const vs_volume *v, int dims[3]);

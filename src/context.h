@@ -4,6 +4,7 @@
 #define VS_CONTEXT_H
 
 #include "vsplat.h"
+#include <stdatomic.h>
 #include <stdint.h>
 
 struct vs_pool;
@@ -28,6 +29,9 @@ struct vs_context {
     void *oiio_handle;                  /* its dlopen handle                     */
     const struct vs_dicom_api *dicom;   /* DICOM module (GDCM), on first use     */
     void *dicom_handle;
+    atomic_int busy;                    /* 1 while vs_render runs: a second
+                                           thread's vs_render gets VS_ERR_BUSY
+                                           instead of racing on the caches */
 };
 
 /* Free the workers' tile scratch (src/tile.c). */

@@ -35,6 +35,7 @@ const char *vs_status_string(vs_status s)
     case VS_ERR_UNSUPPORTED: return "unsupported";
     case VS_ERR_CANCELLED: return "cancelled";
     case VS_ERR_INTERNAL: return "internal error";
+    case VS_ERR_BUSY: return "context busy: another thread is using it (one context per thread)";
     }
     return "unknown status";
 }

@@ -519,10 +519,9 @@ fail:
     return rc;
 }
 
-vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *settings, vs_image *out,
-                    vs_stats *stats)
+static vs_status render_exclusive(vs_context *ctx, const vs_volume *vol, const vs_settings *settings, vs_image *out,
+                                  vs_stats *stats)
 {
-    if (!ctx) return VS_ERR_INVALID_ARGUMENT;
     if (!vol || !settings || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "vs_render: NULL argument");
     out->width = out->height = 0;
     out->rgba = NULL;
@@ -563,5 +562,23 @@ vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *se
     else
         rc = render_splat(ctx, vol, s, out, st);
     if (rc == VS_OK && stats) vs_stats_export(st, stats, s->stats_size);
+    return rc;
+}
+
+vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *settings, vs_image *out,
+                    vs_stats *stats)
+{
+    if (!ctx) return VS_ERR_INVALID_ARGUMENT;
+    /* one call at a time per context (vsplat.h): a second thread is told
+     * so, without touching the caches or the message the first one uses */
+    if (atomic_exchange(&ctx->busy, 1)) {
+        if (out) {
+            out->width = out->height = 0;
+            out->rgba = NULL;
+        }
+        return VS_ERR_BUSY;
+    }
+    vs_status rc = render_exclusive(ctx, vol, settings, out, stats);
+    atomic_store(&ctx->busy, 0);
     return rc;
 }

@@ -33,8 +33,8 @@ const char *vs_type_name(vs_type t)
     return "unknown";
 }
 
-vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
-                          const double spacing[3], struct vs_volume **out)
+vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3],
+                                const double spacing[3], struct vs_volume **out)
 {
     if (!dims || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "volume: NULL argument");
     *out = NULL;
@@ -56,12 +56,6 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                             (unsigned long long)n, (unsigned long long)VS_MAX_VOXELS);
     struct vs_volume *v = calloc(1, sizeof *v);
     if (!v) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "volume: out of memory");
-    v->data = calloc((size_t)n, vs_type_size(type));
-    if (!v->data) {
-        free(v);
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "volume: cannot allocate %llu bytes",
-                            (unsigned long long)(n * vs_type_size(type)));
-    }
     v->type = type;
     for (int a = 0; a < 3; a++) {
         v->dims[a] = dims[a];
@@ -75,6 +69,23 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
     return VS_OK;
 }
 
+vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
+                          const double spacing[3], struct vs_volume **out)
+{
+    vs_status st = vs_volume_alloc_shell(ctx, type, dims, spacing, out);
+    if (st != VS_OK) return st;
+    struct vs_volume *v = *out;
+    const size_t n = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
+    v->data = calloc(n, vs_type_size(type));
+    if (!v->data) {
+        free(v);
+        *out = NULL;
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "volume: cannot allocate %llu bytes",
+                            (unsigned long long)n * vs_type_size(type));
+    }
+    return VS_OK;
+}
+
 vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
                            const double spacing[3], vs_volume **out)
 {
@@ -84,7 +95,10 @@ vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
 void vs_volume_release(vs_volume *v)
 {
     if (!v) return;
-    free(v->data);
+    if (!v->wrapped)
+        free(v->data);
+    else if (v->release)
+        v->release(v->release_user, v->data);
     free(v);
 }
 

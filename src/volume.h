@@ -38,6 +38,11 @@ struct vs_volume {
     uint64_t serial;     /* unique per allocation and per vs_volume_update_range:
                             what caches key on (an address can be reused, and
                             data rewritten in place keeps it) */
+    /* who frees data: the library (wrapped 0) or the caller's release
+     * callback (vs_volume_wrap, src/volume_wrap.c) */
+    int wrapped;
+    vs_release_fn release;
+    void *release_user;
 };
 
 size_t vs_type_size(vs_type t);
@@ -82,6 +87,10 @@ static inline void vs_volume_grid_gradient(const struct vs_volume *v, int i, int
  * becomes its column norms.  VS_ERR_INVALID_ARGUMENT (volume unchanged) if a
  * column is zero, not finite or the matrix is singular. */
 vs_status vs_volume_set_affine(vs_context *ctx, struct vs_volume *v, const double m[3][4]);
+/* A volume with checked sizes and no data yet (vs_volume_wrap): data NULL.
+ * Sets ctx error. */
+vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3],
+                                const double spacing[3], struct vs_volume **out);
 /* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out);

@@ -71,6 +71,22 @@ if command -v man >/dev/null && MANPAGER=cat MANWIDTH=100 man -l "$P/share/man/m
         if grep -q -- "$w" "$T/man"; then ok; else bad "man page lacks $w"; fi
     done
 elif grep -q '^\.TH VSPLAT 1' "$P/share/man/man1/vsplat.1"; then ok; else bad "man page has no .TH"; fi
+# the Python package: installed beside the library, it finds the installed
+# libvsplat.so (relative to itself) and renders
+PY3=$(command -v /usr/bin/python3 || command -v python3 || true)
+if [[ -n $PY3 ]] && "$PY3" -c 'import numpy' 2>/dev/null; then
+    if PYTHONPATH=$P/lib/python3/dist-packages env -u VSPLAT_LIBRARY "$PY3" -c '
+import os, sys, numpy, vsplat
+lib = os.path.realpath(vsplat.library_path())
+assert lib.startswith(os.path.realpath(sys.argv[1])), lib
+img = vsplat.render(vsplat.Volume(numpy.zeros((16, 16, 16), numpy.float32)), iso=0.5, size=8)
+assert img.shape == (8, 8, 4), img.shape
+vsplat.save(img, sys.argv[1] + "/py.png")
+' "$P" >"$T/run" 2>&1 && [[ -s $P/py.png ]]; then ok; else bad "installed Python package: $(tail -c 600 "$T/run")"; fi
+    if [[ -x $P/share/doc/vsplat/examples/render_colin27.py ]]; then ok; else bad "not installed: render_colin27.py"; fi
+else
+    echo "note: python3 with NumPy not found; the installed Python package is not tried"
+fi
 EX=$P/share/doc/vsplat/examples/example_embed.c
 ENGINE=$P/share/vsplat/tf/engine.1dt
 

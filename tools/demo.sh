@@ -11,6 +11,7 @@ HEAD=/usr/share/mricron/templates/ch2.nii.gz
 BUILD=${VSPLAT_BUILD_DIR:-$ROOT/build}
 
 "$ROOT/tools/build.sh" "$BUILD"
+"$ROOT/tools/python-user-site.sh" "$BUILD" # python3 -c "import vsplat" works from now on
 VSPLAT=$BUILD/vsplat
 
 if [[ -f $HEAD ]]; then

@@ -16,6 +16,7 @@ PACKAGES=(
     mricron-data  # the Colin27 demo head (ch2.nii.gz)
     libvolpack1-dev  # vsplat-bench peers: VolPack's octree renderer
     gnuplot-nox jq  # plots; tools/trace-png.sh reads traces with jq
+    python3 python3-numpy  # the Python package (tools/python) and its tests
     clang libclang-rt-14-dev valgrind  # sanitizers, fuzzers, memcheck
     libopenmpi-dev openmpi-bin  # vsplat-mpi (optional: the rest builds without it)
 )
