@@ -120,10 +120,20 @@ static inline void weights_shaded(const vs_frame *F, const pend *p, unsigned liv
             sp[l] = lut->specular[li[l]];
         }
     }
-    for (unsigned m = live; m; m &= m - 1) {
-        const int l = __builtin_ctz(m);
-        for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
-        w[l][3] = (opacity ? alpha[l] : val[l]) * bscale;
+    if (opacity) {
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
+            w[l][3] = alpha[l] * bscale;
+        }
+    } else { /* post-alpha: the light's terms, opacity-weighted, and the density */
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            w[l][0] = d[l] * alpha[l] * bscale;
+            w[l][1] = sp[l] * alpha[l] * bscale;
+            w[l][2] = alpha[l] * bscale;
+            w[l][3] = val[l] * bscale;
+        }
     }
 }
 
@@ -215,9 +225,16 @@ void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
         }
 }
 
-/* Pre-shaded, post-classified opacity: the splatted colour, clamped. */
+/* Pre-shaded, post-classified opacity (Wittenbrink et al.'s
+ * opacity-weighted interpolation): the voxels' diffuse and specular terms
+ * were splatted weighted by their opacity, so dividing by the splatted
+ * opacity gives the light the opaque voxels see, undarkened where the
+ * kernel straddles an edge; the material colour is classified from the
+ * splatted density, as the opacity is, so that a thin translucent layer
+ * keeps its own colour beside an opaque one. */
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
+    const vs_frame *F = t->F;
     const spans *sp = sv->sp;
     const float *q = sv->q;
     for (int y = sp->y0; y < sp->y1; y++)
@@ -226,8 +243,20 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             size_t b = (size_t)y * t->stride + x;
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;
+            float d, spec, rgb[3];
+            const float a = q[4 * b + 2];
+            if (a > 1e-30f && a <= FLT_MAX) {
+                d = q[4 * b] / a;
+                spec = q[4 * b + 1] / a;
+            } else { /* no opaque voxel near: lit as facing the eye */
+                double n[3] = {0.0, 0.0, 0.0}, dd, ss;
+                vs_light_eval(&F->light, n, &dd, &ss);
+                d = (float)dd;
+                spec = (float)ss;
+            }
+            lookup_color(F, q[4 * b + 3], rgb);
             for (int i = 0; i < 3; i++) {
-                float v = q[4 * b + i];
+                float v = rgb[i] * d + spec;
                 c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
             }
         }
