@@ -59,8 +59,8 @@ void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_s
     s->headlight = 1;
     s->light_dir[2] = 1.0;
     s->ambient = 0.2;
-    s->diffuse = 0.7;
-    s->specular = 0.3;
+    s->diffuse = 0.6;
+    s->specular = 0.2;
     s->shininess = 20.0;
     s->occlusion = 1;
     s->occlusion_threshold = 0.995;

@@ -255,9 +255,6 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 spec = (float)ss;
             }
             lookup_color(F, q[4 * b + 3], rgb);
-            for (int i = 0; i < 3; i++) {
-                float v = rgb[i] * d + spec;
-                c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
-            }
+            for (int i = 0; i < 3; i++) c[i] = rgb[i] * d + spec;
         }
 }

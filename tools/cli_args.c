@@ -597,7 +597,7 @@ void cli_render_usage(FILE *f)
             "  --normal-lut N         angle bins of the shading table (default 256)\n"
             "lighting (one directional light, Phong):\n"
             "  --light X,Y,Z          direction towards the light, world space (turns the headlight off)\n"
-            "  --ambient K  --diffuse K  --specular K  --shininess N   (defaults 0.2 0.7 0.3 20)\n"
+            "  --ambient K  --diffuse K  --specular K  --shininess N   (defaults 0.2 0.6 0.2 20)\n"
             "reference ray caster (--pipeline raycast):\n"
             "  --ray-step S           step in voxel units (default 0.1)\n"
             "  --trilinear            trilinear instead of exact Gaussian reconstruction\n"
