@@ -144,6 +144,13 @@ typedef struct vs_settings {
     /* profiling: record the frame's timeline into this trace (vs_trace_create;
      * NULL, the default: nothing is recorded and nothing costs) */
     vs_trace *trace;
+
+    /* pre-integrated classification between sheets (post-cd, post-gs): each
+     * pixel's segment from one sheet to the next classified from both
+     * densities through a 2-D table.  -1 (default): on with a transfer
+     * function or an iso opacity under 1 (translucent classification), off
+     * for an opaque iso-range; 0 off; 1 on */
+    int preintegration;
 } vs_settings;
 
 typedef struct vs_stage_times {

@@ -26,7 +26,8 @@ static const size_t settings_ends[] = {
     END_S(headlight), END_S(light_dir), END_S(ambient), END_S(diffuse), END_S(specular), END_S(shininess),
     END_S(background), END_S(occlusion), END_S(occlusion_threshold), END_S(tile_counters),
     END_S(tile_size), END_S(exact_normals), END_S(normal_lut_size), END_S(threads), END_S(isa), END_S(pin),
-    END_S(ray_step), END_S(ray_trilinear), END_S(ray_analytic), END_S(progress), END_S(progress_user), END_S(trace)};
+    END_S(ray_step), END_S(ray_trilinear), END_S(ray_analytic), END_S(progress), END_S(progress_user), END_S(trace),
+    END_S(preintegration)};
 static const size_t stats_ends[] = {
     END_T(pipeline), END_T(isa), END_T(threads), END_T(width), END_T(height), END_T(voxels_total),
     END_T(voxels_relevant), END_T(voxels_splatted), END_T(voxels_culled), END_T(sheets),
@@ -38,7 +39,7 @@ static const size_t load_ends[] = {END_L(raw),  END_L(dims),        END_L(type),
                                    END_L(endian), END_L(has_spacing), END_L(spacing)};
 
 #define ROUND(n, T) (((n) + _Alignof(T) - 1) / _Alignof(T) * _Alignof(T))
-_Static_assert(ROUND(END_S(trace), vs_settings) == sizeof(vs_settings),
+_Static_assert(ROUND(END_S(preintegration), vs_settings) == sizeof(vs_settings),
                "a field appended to vs_settings: add it to settings_ends");
 _Static_assert(ROUND(END_T(bytes_written), vs_stats) == sizeof(vs_stats),
                "a field appended to vs_stats: add it to stats_ends");

@@ -80,7 +80,7 @@ enum opt_id {
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
-    O_TURNTABLE, O_FPS
+    O_TURNTABLE, O_FPS, O_PREINT, O_NO_PREINT
 };
 
 typedef struct opt_def {
@@ -123,6 +123,8 @@ static const opt_def opt_table[] = {
     {"--tile-size", 1, O_TILE_SIZE, 0},
     {"--exact-normals", 0, O_EXACT_N, 0},
     {"--normal-lut", 1, O_NORMAL_LUT, 0},
+    {"--preintegration", 0, O_PREINT, 0},
+    {"--no-preintegration", 0, O_NO_PREINT, 0},
     {"--ray-step", 1, O_RAY_STEP, 0},
     {"--trilinear", 0, O_TRILINEAR, 0},
     {"--no-analytic", 0, O_NO_ANALYTIC, 0},
@@ -354,6 +356,8 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_NO_TILES: s->tile_counters = 0; return 0;
     case O_TILE_SIZE: return parse_range_int(n, v, 8, 4096, &s->tile_size, err, cap);
     case O_EXACT_N: s->exact_normals = 1; return 0;
+    case O_PREINT: s->preintegration = 1; return 0;
+    case O_NO_PREINT: s->preintegration = 0; return 0;
     case O_NORMAL_LUT: return parse_range_int(n, v, 8, 65536, &s->normal_lut_size, err, cap);
     case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
     case O_TRILINEAR: s->ray_trilinear = 1; return 0;
@@ -588,6 +592,9 @@ void cli_render_usage(FILE *f)
             "  --kernel-radius R      Gaussian kernel radius, 0.5..8 (default 2)\n"
             "  --footprint-res N      footprint table entries per radius unit (default 256)\n"
             "  --seam N|auto          seam layer width in voxels (default auto)\n"
+            "  --no-preintegration    classify each sheet alone (default: post-cd and post-gs classify\n"
+            "                         the segment to the next sheet, pre-integrated, when the\n"
+            "                         classification is translucent; --preintegration always)\n"
             "leaving out work:\n"
             "  --no-occlusion         no early splat elimination\n"
             "  --occlusion-threshold T  opacity above which a pixel is occluded (default 0.995)\n"
