@@ -133,6 +133,8 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
     }
     p->vmin = c->vmin;
     p->scale = (VS_PREINT_N - 1) / (c->vmax - c->vmin);
+    p->fvmin = (float)p->vmin;
+    p->fscale = (float)p->scale;
     build_job J = {p, c, slab, &P};
     const int ntask = (VS_PREINT_N + ROWS - 1) / ROWS;
     if (pool)
@@ -153,9 +155,8 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
 void vs_preint_alpha_row(const vs_preint *p, float *alpha, const float *q, const float *qn, int qs, int n)
 {
     for (int i = 0; i < n; i++) {
-        float e[4];
-        vs_preint_lookup(p, q[(ptrdiff_t)i * qs], qn[(ptrdiff_t)i * qs], e);
-        alpha[i] = e[0];
+        const vs_preint_at a = vs_preint_locate(p, q[(ptrdiff_t)i * qs], qn[(ptrdiff_t)i * qs]);
+        alpha[i] = vs_preint_get(p, &a, 0);
     }
 }
 

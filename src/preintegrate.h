@@ -7,11 +7,14 @@
 
 #include "classify.h"
 
+#include <stddef.h>
+
 /* Entries per axis of the table (over the classification's domain). */
 #define VS_PREINT_N 256
 
 typedef struct vs_preint {
     double vmin, scale;   /* coordinate x = (v - vmin) * scale, in [0, N-1] */
+    float fvmin, fscale;  /* the same in float, for the per-pixel look-ups  */
     /* [front][back] of (opacity of the segment, the colour it emits r g b,
      * premultiplied by that opacity, so that interpolating next to a
      * transparent entry does not darken); four floats an entry, one
@@ -34,47 +37,53 @@ struct vs_pool;
 int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_pool *pool);
 void vs_preint_free(vs_preint *p);
 
+/* Where (front, back) falls in the table: the entry below it and the
+ * bilinear weights; computed once a pixel for every look-up. */
+typedef struct vs_preint_at {
+    size_t idx;  /* entry (i, j) = i * N + j */
+    float fx, fy;
+} vs_preint_at;
+
+static inline vs_preint_at vs_preint_locate(const vs_preint *p, float f, float b)
+{
+    float x = (f - p->fvmin) * p->fscale, y = (b - p->fvmin) * p->fscale;
+    const float top = (float)(VS_PREINT_N - 2);
+    if (!(x > 0.0f)) x = 0.0f; /* also NaN */
+    if (!(y > 0.0f)) y = 0.0f;
+    vs_preint_at a;
+    int i = x < top ? (int)x : VS_PREINT_N - 2, j = y < top ? (int)y : VS_PREINT_N - 2;
+    a.fx = x < top + 1.0f ? x - (float)i : 1.0f;
+    a.fy = y < top + 1.0f ? y - (float)j : 1.0f;
+    a.idx = (size_t)i * VS_PREINT_N + (size_t)j;
+    return a;
+}
+
+/* Channel c of the table at a (0 opacity, 1..3 premultiplied colour). */
+static inline float vs_preint_get(const vs_preint *p, const vs_preint_at *a, int c)
+{
+    const float *e00 = p->tab + 4 * a->idx + c, *e10 = e00 + 4 * VS_PREINT_N;
+    const float u = e00[0] + a->fy * (e00[4] - e00[0]);
+    const float v = e10[0] + a->fy * (e10[4] - e10[0]);
+    return u + a->fx * (v - u);
+}
+
 /* Bilinear look-up at (front, back): out = (opacity, premultiplied r g b). */
 static inline void vs_preint_lookup(const vs_preint *p, float f, float b, float out[4])
 {
-    float x = (float)((f - p->vmin) * p->scale), y = (float)((b - p->vmin) * p->scale);
-    const float top = (float)(VS_PREINT_N - 1);
-    if (!(x > 0.0f)) x = 0.0f; /* also NaN */
-    if (!(y > 0.0f)) y = 0.0f;
-    if (x > top) x = top;
-    if (y > top) y = top;
-    int i = (int)x, j = (int)y;
-    if (i > VS_PREINT_N - 2) i = VS_PREINT_N - 2;
-    if (j > VS_PREINT_N - 2) j = VS_PREINT_N - 2;
-    const float fx = x - (float)i, fy = y - (float)j;
-    const float *e00 = p->tab + 4 * ((size_t)i * VS_PREINT_N + j), *e01 = e00 + 4;
-    const float *e10 = e00 + 4 * VS_PREINT_N, *e11 = e10 + 4;
-    for (int c = 0; c < 4; c++) {
-        float a = e00[c] + fy * (e01[c] - e00[c]);
-        float b2 = e10[c] + fy * (e11[c] - e10[c]);
-        out[c] = a + fx * (b2 - a);
-    }
+    const vs_preint_at a = vs_preint_locate(p, f, b);
+    for (int c = 0; c < 4; c++) out[c] = vs_preint_get(p, &a, c);
 }
 
-/* The opacity-weighted position along the segment at (front, back), in
- * [0, 1]; where the shading gradient is taken between the two sheets. */
-static inline float vs_preint_position(const vs_preint *p, float f, float b, float alpha)
+/* The opacity-weighted position along the segment at a, in [0, 1], for
+ * the segment's opacity alpha: where the shading gradient is taken
+ * between the two sheets. */
+static inline float vs_preint_position(const vs_preint *p, const vs_preint_at *a, float alpha)
 {
     if (!(alpha > 0.0f)) return 0.0f;
-    float x = (float)((f - p->vmin) * p->scale), y = (float)((b - p->vmin) * p->scale);
-    const float top = (float)(VS_PREINT_N - 1);
-    if (!(x > 0.0f)) x = 0.0f;
-    if (!(y > 0.0f)) y = 0.0f;
-    if (x > top) x = top;
-    if (y > top) y = top;
-    int i = (int)x, j = (int)y;
-    if (i > VS_PREINT_N - 2) i = VS_PREINT_N - 2;
-    if (j > VS_PREINT_N - 2) j = VS_PREINT_N - 2;
-    const float fx = x - (float)i, fy = y - (float)j;
-    const float *e = p->pos + (size_t)i * VS_PREINT_N + j;
-    float a = e[0] + fy * (e[1] - e[0]);
-    float b2 = e[VS_PREINT_N] + fy * (e[VS_PREINT_N + 1] - e[VS_PREINT_N]);
-    float t = (a + fx * (b2 - a)) / alpha;
+    const float *e = p->pos + a->idx, *e1 = e + VS_PREINT_N;
+    const float u = e[0] + a->fy * (e[1] - e[0]);
+    const float v = e1[0] + a->fy * (e1[1] - e1[0]);
+    const float t = (u + a->fx * (v - u)) / alpha;
     return t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
 }
 

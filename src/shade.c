@@ -223,10 +223,11 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             float *c = sb.g + 3 * o;
             float d, spec, e[4];
             const float qf = sv->q[ch * b], qb = sv->next[ch * b];
-            vs_preint_lookup(F->preint, qf, qb, e);
+            const vs_preint_at at = vs_preint_locate(F->preint, qf, qb);
+            for (int i = 0; i < 4; i++) e[i] = vs_preint_get(F->preint, &at, i);
             float g[3] = {c[0], c[1], c[2]};
-            if (mix) {
-                const float w = vs_preint_position(F->preint, qf, qb, e[0]);
+            const float w = mix ? vs_preint_position(F->preint, &at, e[0]) : 0.0f;
+            if (w > 0.0f) {
                 float h[3];
                 if (gs) {
                     for (int i = 0; i < 3; i++) h[i] = sv->next[4 * b + 1 + i] / slab;
