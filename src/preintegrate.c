@@ -97,6 +97,10 @@ static void build_rows(void *arg, int worker, int task)
                 Z += (1.0 - A) * a * (m + 0.5) / PIECES;
                 A += (1.0 - A) * a;
             }
+            if (!(A >= 1e-30)) { /* as good as transparent: no colour whose inverse overflows */
+                A = Z = 0.0;
+                C[0] = C[1] = C[2] = 0.0;
+            }
             float *e = p->tab + 4 * ((size_t)i * VS_PREINT_N + j);
             e[0] = (float)(A > 1.0 ? 1.0 : A);
             for (int ch = 0; ch < 3; ch++) e[1 + ch] = (float)C[ch];

@@ -245,7 +245,8 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             } else {
                 shade_gradient(F, g[0], g[1], g[2], &d, &spec);
             }
-            const float inv = e[0] > 0.0f ? 1.0f / e[0] : 0.0f;
+            float inv = e[0] > 0.0f ? 1.0f / e[0] : 0.0f;
+            if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
             c[0] = e[1] * inv * d + spec;
             c[1] = e[2] * inv * d + spec;
             c[2] = e[3] * inv * d + spec;
