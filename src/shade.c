@@ -1,8 +1,10 @@
-/* Shading: voxels before splatting (pre-shaded pipelines: classified
- * colour times the Phong terms of the grid gradient) and sheet pixels
- * after classification (post-shaded: the Phong terms of the sheet's
- * gradient, by the Clyne-Dennis tables or exact; pre: the splatted colour
- * divided by the splatted opacity; post-alpha: the splatted colour).  The
+/* Shading: voxels before splatting (pre: classified colour times the
+ * Phong terms of the grid gradient; post-alpha: those terms alone) and
+ * sheet pixels after classification (post-shaded: the Phong terms of the
+ * sheet's gradient, by the Clyne-Dennis tables or exact, times the colour
+ * table or the pre-integrated segment's colour; pre: the splatted colour
+ * divided by the splatted opacity; post-alpha: the splatted light terms
+ * divided by the splatted opacity, times the classified colour).  The
  * light model is light.c's, the tables shade_lut.c's. */
 #include "shade.h"
 #include "preintegrate.h"
