@@ -18,6 +18,11 @@ if [[ -d $DATA ]]; then
     C=$DATA/colin27_ch2_mri_t1_head_181x217x181_u8.nii.gz
     "$V" render "$C" --iso 45 --ramp 10 --view 200,10 --pipeline pre "${S[@]}" -q -o "$OUT/head-skin-pre.png"
     "$V" render "$C" --iso 45 --ramp 10 --view 200,10 --pipeline post-cd "${S[@]}" -q -o "$OUT/head-skin-post-cd.png"
+    # translucent: skin over cortical folds, every pipeline next to the ray caster
+    for p in pre post-cd post-gs post-alpha raycast; do
+        "$V" render "$C" --tf "$ROOT/tools/tf/colin27-skin-brain.vtf" --view 120,15 --pipeline $p "${S[@]}" -q \
+            -o "$OUT/head-tf-$p.png"
+    done
     # perspective (45 degrees): the near side looms larger than the far one
     "$V" render "$C" --iso 45 --ramp 10 --view 235,-5 --zoom 0.7 --perspective 45 --pipeline post-cd "${S[@]}" -q \
         -o "$OUT/head-perspective-post-cd.png"

@@ -2,13 +2,18 @@
  * pipeline x sheet thickness x exact/LUT normals x footprint-table resolution
  * is timed (interleaved runs, median) and compared with a reference ray
  * caster: the scene's analytic function for sphere, ml and cube (ray step
- * 0.05, iso crossing refined; the sphere also in perspective), and for Colin27 the same samples
+ * 0.05, iso crossing refined; the sphere also in perspective), and for Colin27 (an opaque
+ * iso-surface, and translucent with tools/tf/colin27-skin-brain.vtf) the same samples
  * reconstructed with the exact Gaussian (ray step 0.05).  RMSE, PSNR and SSIM
  * come from vs_image_compare (all four channels); for the cube also the
  * silhouette edge width (10-90 % of alpha, as tests/test_splat.c).  A row is
  * on the Pareto front (*) if no other row of its scene is both faster and
  * more accurate (higher PSNR). */
 #include "bench.h"
+
+#ifndef VSPLAT_SOURCE_DIR
+#define VSPLAT_SOURCE_DIR "."
+#endif
 
 #include <math.h>
 #include <stdlib.h>
@@ -24,16 +29,19 @@ typedef struct err_scene {
     double iso, ramp;
     int edge; /* measure the cube's silhouette edge width */
     double fov; /* perspective field of view (0: orthographic) */
+    const char *tf; /* transfer-function file under the source tree, or NULL */
 } err_scene;
 
 static const err_scene scenes[] = {
-    {"sphere", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0, 0.0},
-    {"ml", "scene:ml", 1, 256, 128, 20, 15, 0, 0, 0, 0, 0.0},
+    {"sphere", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0, 0.0, NULL},
+    {"ml", "scene:ml", 1, 256, 128, 20, 15, 0, 0, 0, 0, 0.0, NULL},
     /* view 0,0 as tests/test_splat.c: the right silhouette crosses the middle row */
-    {"cube", "scene:cube", 1, 256, 128, 0, 0, 0, 0, 0, 1, 0.0},
-    {"colin27", "colin27", 0, 128, 64, 180, 0, 1, 45, 10, 0, 0.0},
+    {"cube", "scene:cube", 1, 256, 128, 0, 0, 0, 0, 0, 1, 0.0, NULL},
+    {"colin27", "colin27", 0, 128, 64, 180, 0, 1, 45, 10, 0, 0.0, NULL},
     /* perspective, against the ray caster casting from the eye */
-    {"sphere-persp30", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0, 30.0},
+    {"sphere-persp30", "scene:sphere", 1, 256, 128, 20, 15, 0, 0, 0, 0, 30.0, NULL},
+    /* translucent: skin over cortical folds (pre-integration on by default) */
+    {"colin27-tf", "colin27", 0, 128, 64, 120, 15, 0, 0, 0, 0, 0.0, "tools/tf/colin27-skin-brain.vtf"},
 };
 #define NSCENES ((int)(sizeof scenes / sizeof scenes[0]))
 
@@ -142,6 +150,23 @@ int bench_error(const bench_opts *o)
             base.iso_hi = INFINITY;
             base.ramp = sc->ramp;
         }
+        vs_tf_point *tfp = NULL;
+        if (sc->tf) {
+            char path[4096];
+            snprintf(path, sizeof path, "%s/%s", VSPLAT_SOURCE_DIR, sc->tf);
+            vs_context *tctx = NULL;
+            int n = 0;
+            if (vs_context_create(&tctx) != VS_OK || vs_tf_load_for_volume(tctx, path, vol, &tfp, &n) != VS_OK) {
+                fprintf(stderr, "error: %s: %s\n", path, tctx ? vs_last_error(tctx) : "no context");
+                if (tctx) vs_context_release(tctx);
+                failed++;
+                vs_volume_release(vol);
+                continue;
+            }
+            vs_context_release(tctx);
+            base.tf = tfp;
+            base.tf_count = n;
+        }
         /* the reference */
         vs_settings rs = base;
         rs.pipeline = VS_PIPELINE_RAYCAST;
@@ -156,6 +181,7 @@ int bench_error(const bench_opts *o)
         if (bench_run(label, &ref, 1, 1)) {
             failed++;
             bench_cases_free(&ref, 1);
+            vs_tf_free(tfp);
             vs_volume_release(vol);
             continue;
         }
@@ -170,6 +196,7 @@ int bench_error(const bench_opts *o)
             free(cases);
             free(rows);
             bench_cases_free(&ref, 1);
+            vs_tf_free(tfp);
             vs_volume_release(vol);
             return 2;
         }
@@ -237,6 +264,7 @@ int bench_error(const bench_opts *o)
         free(cases);
         free(rows);
         bench_contexts_release();
+        vs_tf_free(tfp);
         vs_volume_release(vol);
     }
     fclose(csv);

@@ -23,7 +23,7 @@
  *    voxel centres onto vsplat's (VolPack puts voxel i at i - n/2, vsplat at
  *    i - (n-1)/2); the window gives vsplat's pixels per mm;
  *  - shading: VolPack's lookup shader (one material, grey) with vsplat's
- *    Blinn-Phong constants (ambient 0.2, diffuse 0.7, specular 0.3,
+ *    Blinn-Phong constants (ambient 0.2, diffuse 0.6, specular 0.2,
  *    exponent 20), two-sided, a headlight; normals are VolPack's own
  *    (central differences of the voxels, 13-bit code, vpVolumeNormals);
  *  - thresholds: VP_MAX_RAY_OPACITY = vsplat's occlusion threshold (0.995),
@@ -154,8 +154,8 @@ static int vp_setup(vp_peer *p, vs_volume *vol, int W, int H, double iso, double
     if (!r) r = vpCreateMinMaxOctree(c, 0, 4);
     if (!r) r = vpSetLookupShader(c, 1, 1, 0, p->shade, (int)sizeof p->shade, 0, NULL, 0);
     if (!r) r = vpSetMaterial(c, VP_MATERIAL0, VP_AMBIENT, VP_BOTH_SIDES, 0.2, 0.2, 0.2);
-    if (!r) r = vpSetMaterial(c, VP_MATERIAL0, VP_DIFFUSE, VP_BOTH_SIDES, 0.7, 0.7, 0.7);
-    if (!r) r = vpSetMaterial(c, VP_MATERIAL0, VP_SPECULAR, VP_BOTH_SIDES, 0.3, 0.3, 0.3);
+    if (!r) r = vpSetMaterial(c, VP_MATERIAL0, VP_DIFFUSE, VP_BOTH_SIDES, 0.6, 0.6, 0.6);
+    if (!r) r = vpSetMaterial(c, VP_MATERIAL0, VP_SPECULAR, VP_BOTH_SIDES, 0.2, 0.2, 0.2);
     if (!r) r = vpSetMaterial(c, VP_MATERIAL0, VP_SHINYNESS, VP_BOTH_SIDES, 20.0, 0.0, 0.0);
     /* the model matrix is the identity here: the light is in eye space, from the eye */
     if (!r) r = vpSetLight(c, VP_LIGHT0, VP_DIRECTION, 0.0, 0.0, 1.0);

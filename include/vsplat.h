@@ -202,6 +202,13 @@ typedef struct vs_settings {
      * 0 <= crop_lo < crop_hi <= dims.  Not for the ray caster. */
     int has_crop;
     int crop_lo[3], crop_hi[3];
+
+    /* pre-integrated classification between sheets (post-cd, post-gs): each
+     * pixel's segment from one sheet to the next classified from both
+     * densities through a 2-D table.  -1 (default): on with a transfer
+     * function or an iso opacity under 1 (translucent classification), off
+     * for an opaque iso-range; 0 off; 1 on */
+    int preintegration;
 } vs_settings;
 
 typedef struct vs_stage_times {

@@ -2,6 +2,7 @@
 #include "context.h"
 #include "shade_lut.h"
 #include "pool.h"
+#include "preintegrate.h"
 #include "relevant.h"
 
 #include <dlfcn.h>
@@ -26,6 +27,7 @@ void vs_context_release(vs_context *ctx)
     vs_relevant_cache_free(ctx->relevant);
     if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
     free(ctx->shade_lut);
+    vs_preint_free(ctx->preint);
     vs_tile_scratch_release(ctx->scratch, ctx->nscratch);
     if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */
     if (ctx->dicom_handle) dlclose(ctx->dicom_handle);
@@ -60,10 +62,11 @@ void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_s
     s->headlight = 1;
     s->light_dir[2] = 1.0;
     s->ambient = 0.2;
-    s->diffuse = 0.7;
-    s->specular = 0.3;
+    s->diffuse = 0.6;
+    s->specular = 0.2;
     s->shininess = 20.0;
     s->occlusion = 1;
+    s->preintegration = -1;
     s->occlusion_threshold = 0.995;
     s->tile_counters = 1;
     s->tile_size = 64;

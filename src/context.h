@@ -23,6 +23,9 @@ struct vs_context {
     struct vs_shade_lut *shade_lut;     /* normal and shading tables, rebuilt
                                            only when their size or the light
                                            changes (a headlight never does) */
+    struct vs_preint *preint;           /* pre-integration table, rebuilt only
+                                           when the classification or the slab
+                                           changes */
     struct vs_tile_scratch *scratch;    /* per worker, reused across frames       */
     int nscratch;
     const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */

@@ -48,6 +48,8 @@ typedef struct vs_frame {
     const struct vs_volume *vol;     /* what the voxels' values are read from   */
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
+    const struct vs_preint *preint;  /* pre-integrated classification between
+                                        sheets (post-cd, post-gs), or NULL      */
     int clip_to_volume;              /* empty space is visible: pixels whose sheet
                                         point lies outside the volume stay clear */
     double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */

@@ -28,6 +28,14 @@ static const vs_stages post_gs[2] = {
      .activate = vs_activate_gradient,
      .classify = vs_classify_post_gs, .shade = vs_shade_post_exact},
 };
+/* with pre-integration between sheet k and k + 1 (post-gs then keeps sheet
+ * k + 1 too); one shading function serves tables and exact normals */
+static const vs_stages post_cd_pi = {.ch = 1, .ahead = 1, .weights = vs_weights_density, .raster = vs_raster1,
+                                     .activate = vs_activate_density, .classify = vs_classify_post_cd,
+                                     .shade = vs_shade_post_preint};
+static const vs_stages post_gs_pi = {.ch = 4, .ahead = 1, .gradient_splats = 1, .weights = vs_weights_density,
+                                     .raster = vs_raster_gs, .activate = vs_activate_gradient,
+                                     .classify = vs_classify_post_gs, .shade = vs_shade_post_preint};
 static const vs_stages pre = {.ch = 4, .pre_shaded = 1, .weights = vs_weights_pre, .raster = vs_raster4,
                               .activate = vs_activate_rgba,
                               .classify = vs_classify_pre, .shade = vs_shade_pre};
@@ -35,13 +43,13 @@ static const vs_stages post_alpha = {.ch = 4, .pre_shaded = 1, .weights = vs_wei
                                      .raster = vs_raster4, .activate = vs_activate_rgba, .classify = vs_classify_post_alpha,
                                      .shade = vs_shade_post_alpha};
 
-const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals)
+const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint)
 {
     const int e = exact_normals != 0;
     switch (p) {
     case VS_PIPELINE_PRE: return &pre;
-    case VS_PIPELINE_POST_CD: return &post_cd[e];
-    case VS_PIPELINE_POST_GS: return &post_gs[e];
+    case VS_PIPELINE_POST_CD: return preint ? &post_cd_pi : &post_cd[e];
+    case VS_PIPELINE_POST_GS: return preint ? &post_gs_pi : &post_gs[e];
     case VS_PIPELINE_POST_ALPHA: return &post_alpha;
     default: return NULL; /* the ray caster has no sheets */
     }

@@ -7,6 +7,7 @@
 #include "timing.h"
 #include "finish.h"
 #include "pool.h"
+#include "preintegrate.h"
 #include "tile.h"
 #include "trace.h"
 
@@ -133,6 +134,8 @@ static vs_status check_settings(vs_context *ctx, const vs_settings *s)
     if (!isfinite(s->ambient) || !isfinite(s->diffuse) || !isfinite(s->specular) || !isfinite(s->shininess) ||
         s->ambient < 0 || s->diffuse < 0 || s->specular < 0 || s->shininess < 0 || s->shininess > 1e4)
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "lighting coefficients must be finite and >= 0");
+    if (s->preintegration < -1 || s->preintegration > 1)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "preintegration must be -1 (auto), 0 or 1");
     return VS_OK;
 }
 
@@ -265,7 +268,6 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     memset(&F, 0, sizeof F);
     F.s = s;
     F.pipeline = s->pipeline;
-    F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals);
     for (int i = 0; i < 3; i++) F.spacing[i] = vol->spacing[i];
     vs_status rc;
     float *image = NULL;
@@ -355,6 +357,25 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     }
     int rebuilt = 0;
     if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
+    {
+        /* pre-integration pays where the classification is translucent:
+         * there opacity changes within a slab faster than one sample a slab
+         * follows (rings); an opaque iso-range stops at its first sheets */
+        const int post = s->pipeline == VS_PIPELINE_POST_CD || s->pipeline == VS_PIPELINE_POST_GS;
+        const int want = s->preintegration >= 0 ? s->preintegration : (s->tf_count > 0 || s->iso_opacity < 1.0f);
+        if (post && want) {
+            if (!ctx->preint && !(ctx->preint = calloc(1, sizeof *ctx->preint))) {
+                rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
+                goto fail;
+            }
+            if (!vs_preint_update(ctx->preint, F.cls, s->slab, ctx->pool)) {
+                rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
+                goto fail;
+            }
+            F.preint = ctx->preint;
+        }
+        F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals, F.preint != NULL);
+    }
     double t_rel = vs_now_ms();
     if ((rc = vs_relevant_get(ctx, ctx->pool, vol, F.cls, seam, &F.rel, &rebuilt)) != VS_OK) goto fail;
     const double t_rel_end = vs_now_ms();

@@ -1,10 +1,13 @@
-/* Shading: voxels before splatting (pre-shaded pipelines: classified
- * colour times the Phong terms of the grid gradient) and sheet pixels
- * after classification (post-shaded: the Phong terms of the sheet's
- * gradient, by the Clyne-Dennis tables or exact; pre: the splatted colour
- * divided by the splatted opacity; post-alpha: the splatted colour).  The
+/* Shading: voxels before splatting (pre: classified colour times the
+ * Phong terms of the grid gradient; post-alpha: those terms alone) and
+ * sheet pixels after classification (post-shaded: the Phong terms of the
+ * sheet's gradient, by the Clyne-Dennis tables or exact, times the colour
+ * table or the pre-integrated segment's colour; pre: the splatted colour
+ * divided by the splatted opacity; post-alpha: the splatted light terms
+ * divided by the splatted opacity, times the classified colour).  The
  * light model is light.c's, the tables shade_lut.c's. */
 #include "shade.h"
+#include "preintegrate.h"
 
 #include <float.h>
 #include <math.h>
@@ -120,10 +123,20 @@ static inline void weights_shaded(const vs_frame *F, const pend *p, unsigned liv
             sp[l] = lut->specular[li[l]];
         }
     }
-    for (unsigned m = live; m; m &= m - 1) {
-        const int l = __builtin_ctz(m);
-        for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
-        w[l][3] = (opacity ? alpha[l] : val[l]) * bscale;
+    if (opacity) {
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
+            w[l][3] = alpha[l] * bscale;
+        }
+    } else { /* post-alpha: the light's terms, opacity-weighted, and the density */
+        for (unsigned m = live; m; m &= m - 1) {
+            const int l = __builtin_ctz(m);
+            w[l][0] = d[l] * alpha[l] * bscale;
+            w[l][1] = sp[l] * alpha[l] * bscale;
+            w[l][2] = alpha[l] * bscale;
+            w[l][3] = val[l] * bscale;
+        }
     }
 }
 
@@ -188,6 +201,60 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
         }
 }
 
+/* Post-shaded with pre-integration: the Phong terms of the gradient where
+ * the segment from this sheet to the next is opaque (the two sheets'
+ * gradients mixed by the table's opacity-weighted position; else a thin
+ * layer between sheets is lit as wherever the sheet happens to lie: rings)
+ * times the colour the segment emits (its premultiplied colour over its
+ * opacity).  Sheet k + 1's gradient: post-gs splatted it; post-cd takes its
+ * in-sheet differences and, as sheet k + 2 is not splatted yet, the
+ * difference across the segment extrapolated from sheet k's. */
+void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const spans *sp = sv->sp;
+    const int ch = F->stages->ch;
+    const int gs = F->stages->gradient_splats, mix = !F->cam.persp;
+    const float slab = (float)F->fp.slab;
+    const ptrdiff_t st = t->stride;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            int o = (y - 1) * t->tw + (x - 1);
+            size_t b = (size_t)y * t->stride + x;
+            if (!(sb.alpha[o] > 0.0f)) continue;
+            float *c = sb.g + 3 * o;
+            float d, spec, e[4];
+            const float qf = sv->q[ch * b], qb = sv->next[ch * b];
+            const vs_preint_at at = vs_preint_locate(F->preint, qf, qb);
+            for (int i = 0; i < 4; i++) e[i] = vs_preint_get(F->preint, &at, i);
+            float g[3] = {c[0], c[1], c[2]};
+            const float w = mix ? vs_preint_position(F->preint, &at, e[0]) : 0.0f;
+            if (w > 0.0f) {
+                float h[3];
+                if (gs) {
+                    for (int i = 0; i < 3; i++) h[i] = sv->next[4 * b + 1 + i] / slab;
+                } else {
+                    const float *n = sv->next + b;
+                    h[0] = 0.5f * (n[1] - n[-1]);
+                    h[1] = 0.5f * (n[st] - n[-st]);
+                    h[2] = (qb - qf) / slab;
+                }
+                float d1, s1;
+                shade_gradient(F, g[0], g[1], g[2], &d, &spec);
+                shade_gradient(F, h[0], h[1], h[2], &d1, &s1);
+                d += w * (d1 - d);
+                spec += w * (s1 - spec);
+            } else {
+                shade_gradient(F, g[0], g[1], g[2], &d, &spec);
+            }
+            float inv = e[0] > 0.0f ? 1.0f / e[0] : 0.0f;
+            if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
+            c[0] = e[1] * inv * d + spec;
+            c[1] = e[2] * inv * d + spec;
+            c[2] = e[3] * inv * d + spec;
+        }
+}
+
 /* Pre-shaded: opacity-weighted colour / interpolated opacity, and the
  * opacity corrected for the slab. */
 void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
@@ -215,9 +282,16 @@ void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
         }
 }
 
-/* Pre-shaded, post-classified opacity: the splatted colour, clamped. */
+/* Pre-shaded, post-classified opacity (Wittenbrink et al.'s
+ * opacity-weighted interpolation): the voxels' diffuse and specular terms
+ * were splatted weighted by their opacity, so dividing by the splatted
+ * opacity gives the light the opaque voxels see, undarkened where the
+ * kernel straddles an edge; the material colour is classified from the
+ * splatted density, as the opacity is, so that a thin translucent layer
+ * keeps its own colour beside an opaque one. */
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
+    const vs_frame *F = t->F;
     const spans *sp = sv->sp;
     const float *q = sv->q;
     for (int y = sp->y0; y < sp->y1; y++)
@@ -226,9 +300,18 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             size_t b = (size_t)y * t->stride + x;
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;
-            for (int i = 0; i < 3; i++) {
-                float v = q[4 * b + i];
-                c[i] = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
+            float d, spec, rgb[3];
+            const float a = q[4 * b + 2];
+            if (a > 1e-30f && a <= FLT_MAX) {
+                d = q[4 * b] / a;
+                spec = q[4 * b + 1] / a;
+            } else { /* no opaque voxel near: lit as facing the eye */
+                double n[3] = {0.0, 0.0, 0.0}, dd, ss;
+                vs_light_eval(&F->light, n, &dd, &ss);
+                d = (float)dd;
+                spec = (float)ss;
             }
+            lookup_color(F, q[4 * b + 3], rgb);
+            for (int i = 0; i < 3; i++) c[i] = rgb[i] * d + spec;
         }
 }

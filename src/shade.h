@@ -14,6 +14,7 @@ void vs_weights_post_alpha(const vs_frame *F, const pend *p, unsigned live, floa
 /* Per sheet (the pipeline table's `shade`). */
 void vs_shade_post_lut(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 /* After any of them, with perspective: each pixel's opacity for the

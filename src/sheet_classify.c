@@ -6,6 +6,7 @@
  * compositing skip them.  One function per pipeline (pipeline.c). */
 #include "sheet_classify.h"
 #include "occlusion.h"
+#include "preintegrate.h"
 
 /* With a transfer function that makes value 0 visible, sheet pixels whose
  * slab centre lies outside the volume (where nothing was splatted, so q = 0)
@@ -64,7 +65,8 @@ static inline uint64_t classify_finish(const tile_ctx *t, const sheet_view *sv, 
 }
 
 /* Post-cd: density classified, (FH)D central differences across the
- * sheets before and after. */
+ * sheets before and after.  With pre-integration (post-cd, post-gs) the
+ * opacity is the segment's from this sheet to the next instead. */
 uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
@@ -75,6 +77,7 @@ uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf 
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, sv->q + b, sv->prev + b, sv->next + b, t->stride,
                             sp->xb[y] - sp->xa[y], sv->tabs);
+        if (F->preint) vs_preint_alpha_row(F->preint, sb.alpha + o, sv->q + b, sv->next + b, 1, sp->xb[y] - sp->xa[y]);
     }
     if (F->clip_to_volume) clip_outside(t, sv->k, sp, sb.alpha);
     if (F->cam.persp) perspective_gradients(t, sv->k, sp, sb.alpha, sb.g);
@@ -91,6 +94,8 @@ uint64_t vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf 
         int o = (y - 1) * t->tw + (sp->xa[y] - 1);
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, sv->q + 4 * b, sp->xb[y] - sp->xa[y], sv->tabs);
+        if (F->preint)
+            vs_preint_alpha_row(F->preint, sb.alpha + o, sv->q + 4 * b, sv->next + 4 * b, 4, sp->xb[y] - sp->xa[y]);
     }
     return classify_finish(t, sv, sb);
 }

@@ -165,7 +165,7 @@ static void test_ramp_gradient(void)
                     tu_failures++;
                     continue;
                 }
-                double expect = 0.2 + 0.7 * fabs(sin(azs[a] * M_PI / 180.0));
+                double expect = s.ambient + s.diffuse * fabs(sin(azs[a] * M_PI / 180.0));
                 double worst = 0;
                 for (int y = 28; y < 36; y++)
                     for (int x = 28; x < 36; x++) {

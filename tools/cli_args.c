@@ -80,7 +80,7 @@ enum opt_id {
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
-    O_TURNTABLE, O_FPS, O_UP, O_ROLL
+    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT
 };
 
 typedef struct opt_def {
@@ -125,6 +125,8 @@ static const opt_def opt_table[] = {
     {"--tile-size", 1, O_TILE_SIZE, 0},
     {"--exact-normals", 0, O_EXACT_N, 0},
     {"--normal-lut", 1, O_NORMAL_LUT, 0},
+    {"--preintegration", 0, O_PREINT, 0},
+    {"--no-preintegration", 0, O_NO_PREINT, 0},
     {"--ray-step", 1, O_RAY_STEP, 0},
     {"--trilinear", 0, O_TRILINEAR, 0},
     {"--no-analytic", 0, O_NO_ANALYTIC, 0},
@@ -380,6 +382,8 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_NO_TILES: s->tile_counters = 0; return 0;
     case O_TILE_SIZE: return parse_range_int(n, v, 8, 4096, &s->tile_size, err, cap);
     case O_EXACT_N: s->exact_normals = 1; return 0;
+    case O_PREINT: s->preintegration = 1; return 0;
+    case O_NO_PREINT: s->preintegration = 0; return 0;
     case O_NORMAL_LUT: return parse_range_int(n, v, 8, 65536, &s->normal_lut_size, err, cap);
     case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
     case O_TRILINEAR: s->ray_trilinear = 1; return 0;
@@ -629,6 +633,9 @@ void cli_render_usage(FILE *f)
             "  --kernel-radius R      Gaussian kernel radius, 0.5..8 (default 2)\n"
             "  --footprint-res N      footprint table entries per radius unit (default 256)\n"
             "  --seam N|auto          seam layer width in voxels (default auto)\n"
+            "  --no-preintegration    classify each sheet alone (default: post-cd and post-gs classify\n"
+            "                         the segment to the next sheet, pre-integrated, when the\n"
+            "                         classification is translucent; --preintegration always)\n"
             "leaving out work:\n"
             "  --no-occlusion         no early splat elimination\n"
             "  --occlusion-threshold T  opacity above which a pixel is occluded (default 0.995)\n"
@@ -638,7 +645,7 @@ void cli_render_usage(FILE *f)
             "  --normal-lut N         angle bins of the shading table (default 256)\n"
             "lighting (one directional light, Phong):\n"
             "  --light X,Y,Z          direction towards the light, world space (turns the headlight off)\n"
-            "  --ambient K  --diffuse K  --specular K  --shininess N   (defaults 0.2 0.7 0.3 20)\n"
+            "  --ambient K  --diffuse K  --specular K  --shininess N   (defaults 0.2 0.6 0.2 20)\n"
             "reference ray caster (--pipeline raycast):\n"
             "  --ray-step S           step in voxel units (default 0.1)\n"
             "  --trilinear            trilinear instead of exact Gaussian reconstruction\n"
