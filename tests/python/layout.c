@@ -33,6 +33,8 @@ int main(void)
     F(vs_settings, threads); F(vs_settings, isa); F(vs_settings, pin); F(vs_settings, ray_step);
     F(vs_settings, ray_trilinear); F(vs_settings, ray_analytic); F(vs_settings, progress);
     F(vs_settings, progress_user); F(vs_settings, trace);
+    F(vs_settings, view); F(vs_settings, has_up); F(vs_settings, up); F(vs_settings, roll);
+    F(vs_settings, has_crop); F(vs_settings, crop_lo); F(vs_settings, crop_hi); F(vs_settings, preintegration);
     END();
     BEGIN(vs_stats);
     F(vs_stats, struct_size); F(vs_stats, pipeline); F(vs_stats, isa); F(vs_stats, threads); F(vs_stats, width);
@@ -47,6 +49,7 @@ int main(void)
     BEGIN(vs_load_options);
     F(vs_load_options, struct_size); F(vs_load_options, raw); F(vs_load_options, dims); F(vs_load_options, type);
     F(vs_load_options, endian); F(vs_load_options, has_spacing); F(vs_load_options, spacing);
+    F(vs_load_options, series);
     END();
     BEGIN(vs_image);
     F(vs_image, width); F(vs_image, height); F(vs_image, rgba);

@@ -160,6 +160,31 @@ class Volumes(unittest.TestCase):
             vsplat.render(v)
 
 
+    def test_affine_orients(self):
+        """The same voxels stored with x reversed and an x-flipping affine
+        render as the original under its identity affine; without the
+        affine they render mirrored."""
+        a = np.zeros((24, 24, 24), np.float32)
+        a[6:18, 6:18, 3:10] = 1.0  # a slab on the low-x side: not mirror-symmetric
+        ras = np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])
+        las = np.array([[-1.0, 0, 0, 23], [0, 1, 0, 0], [0, 0, 1, 0]])
+        v0 = vsplat.Volume(a, affine=ras)
+        v1 = vsplat.Volume(a[:, :, ::-1].copy(), affine=las)
+        v2 = vsplat.Volume(a[:, :, ::-1].copy())
+        m, oriented = v1.affine
+        self.assertTrue(oriented)
+        np.testing.assert_allclose(m, las)
+        kw = dict(iso=0.5, size=64, view="anterior", threads=1)
+        i0, i1 = vsplat.render(v0, **kw), vsplat.render(v1, **kw)
+        i2 = vsplat.render(v2, iso=0.5, size=64, view=(180, 0), threads=1)
+        self.assertGreater(vsplat.compare(i0, i1)["psnr"], 60)
+        self.assertLess(vsplat.compare(i0, i2)["psnr"], 30)
+        with self.assertRaises(vsplat.Error):
+            vsplat.Volume(a, affine=np.zeros((3, 4)))
+        with self.assertRaises(vsplat.Error):
+            vsplat.render(v0, view="sideways")
+
+
 class Errors(unittest.TestCase):
     def test_library_messages(self):
         with self.assertRaises(vsplat.Error) as e:

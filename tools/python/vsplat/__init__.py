@@ -104,9 +104,13 @@ def _path_bytes(path):
 class Volume:
     """A volume the library renders.
 
-    Volume(array, spacing=(1, 1, 1)): a 3-D NumPy array of shape (z, y, x)
-    in C order (x varies fastest), so the volume's dimensions are
-    (x, y, z) = array.shape[::-1]; spacing is (sx, sy, sz) in millimetres.
+    Volume(array, spacing=(1, 1, 1), affine=None): a 3-D NumPy array of
+    shape (z, y, x) in C order (x varies fastest), so the volume's
+    dimensions are (x, y, z) = array.shape[::-1]; spacing is (sx, sy, sz) in
+    millimetres.  affine, a 3x4 (or 4x4) index-to-world matrix in RAS
+    millimetres (NIfTI's sform; world = affine[:3,:3] @ (x, y, z) +
+    affine[:3,3]), gives the volume an orientation; its column lengths
+    replace the spacing.
     uint8, int16, uint16 and float32 arrays that are C-contiguous, aligned
     and in native byte order are used in place, without a copy (the Volume
     keeps a reference to the array); others are copied into that layout
@@ -119,7 +123,7 @@ class Volume:
     the library's, visible as `array` (shape (z, y, x), no copy).
     """
 
-    def __init__(self, array, spacing=(1.0, 1.0, 1.0)):
+    def __init__(self, array, spacing=(1.0, 1.0, 1.0), affine=None):
         self._h = None
         orig = array
         a = np.asarray(array)
@@ -146,6 +150,15 @@ class Volume:
         self._h = h
         self._array = a  # the library reads it: kept alive as long as the volume
         self._release = _LIB.vs_volume_release
+        if affine is not None:
+            m = np.asarray(affine, dtype=np.float64)
+            if m.shape not in ((3, 4), (4, 4)):
+                self.close()
+                raise Error("Volume: affine must be 3x4 or 4x4, not %s" % (m.shape,))
+            st = _LIB.vs_volume_set_transform(ctx.h, h, (ctypes.c_double * 12)(*m[:3].ravel()))
+            if st:
+                self.close()
+                ctx.check(st)
 
     @classmethod
     def _adopt(cls, h):
@@ -336,7 +349,10 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
     tf        a transfer-function file (.json ParaView preset, .1dt, .vtf) or
               rows (value, r, g, b, a): replaces the iso-range
     size      N or (width, height) in pixels (default 512 x 512)
-    view      (azimuth, elevation) in degrees; (0, 0) looks along +y, +z up
+    view      (azimuth, elevation) in degrees in the world frame (RAS); (0, 0)
+              looks along +y, +z up; or "anterior", "posterior", "left",
+              "right", "superior", "inferior" (default: anterior for a
+              volume with an orientation, else (0, 0))
     zoom      fraction of the image width the largest extent spans (0.8)
     perspective  vertical field of view in degrees (default orthographic)
     center    (x, y, z) in voxel coordinates the view turns about
@@ -368,7 +384,13 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
     if size is not None:
         w, h = (size, size) if np.isscalar(size) else size
         s.width, s.height = int(w), int(h)
-    if view is not None:
+    if isinstance(view, str):
+        names = ("anterior", "posterior", "left", "right", "superior", "inferior")
+        if view not in names:
+            raise Error("render: view %r: one of %s, or (azimuth, elevation)" % (view, ", ".join(names)))
+        s.view = 2 + names.index(view)  # VS_VIEW_ANTERIOR..VS_VIEW_INFERIOR
+    elif view is not None:
+        s.view = 1  # VS_VIEW_ANGLES: the angles alone, as vsplat --view AZ,EL
         s.azimuth, s.elevation = (float(x) for x in view)
     if zoom is not None:
         s.zoom = float(zoom)

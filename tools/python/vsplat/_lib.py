@@ -55,6 +55,9 @@ class Settings(ctypes.Structure):
         ("ray_step", c_double), ("ray_trilinear", c_int), ("ray_analytic", c_int),
         ("progress", PROGRESS_FN), ("progress_user", c_void_p),
         ("trace", c_void_p),
+        ("view", c_int), ("has_up", c_int), ("up", c_double * 3), ("roll", c_double),
+        ("has_crop", c_int), ("crop_lo", c_int * 3), ("crop_hi", c_int * 3),
+        ("preintegration", c_int),
     ]
 
 
@@ -85,7 +88,7 @@ class Stats(ctypes.Structure):
 class LoadOptions(ctypes.Structure):
     _fields_ = [
         ("struct_size", c_size_t), ("raw", c_int), ("dims", c_int * 3), ("type", c_int), ("endian", c_int),
-        ("has_spacing", c_int), ("spacing", c_double * 3),
+        ("has_spacing", c_int), ("spacing", c_double * 3), ("series", c_char_p),
     ]
 
 
@@ -123,6 +126,7 @@ _PROTOTYPES = {
     "vs_volume_spacing": (None, [c_void_p, P(c_double)]),
     "vs_volume_type": (c_int, [c_void_p]),
     "vs_volume_affine": (c_int, [c_void_p, P(c_double)]),
+    "vs_volume_set_transform": (c_int, [c_void_p, c_void_p, P(c_double)]),
     "vs_volume_update_range": (None, [c_void_p]),
     "vs_volume_range": (None, [c_void_p, P(c_double), P(c_double)]),
     "vs_volume_default_iso": (c_double, [c_void_p]),
