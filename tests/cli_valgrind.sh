@@ -3,7 +3,9 @@
 # under valgrind memcheck: `vsplat info` on every NRRD fuzz reproducer
 # (Teem's header parser leaked on several), on truncated deflate TIFFs as
 # a file and as a tar member (OIIO inflated the cut strips from
-# uninitialised memory) and on the valid TIFF seed.  Each must exit as
+# uninitialised memory), on TIFFs OIIO returned partly undecoded (unknown
+# predictor or compression, a deflate strip too short for its rows) and on
+# the valid TIFF seed.  Each must exit as
 # expected with no memcheck error and no definitely lost block.  Skipped
 # without valgrind and in sanitizer builds (VSPLAT_SANITIZED=1).
 # Usage: bash tests/cli_valgrind.sh PATH_TO_VSPLAT
@@ -48,6 +50,7 @@ for f in "$SRC"/tests/fuzz/regressions/nrrd/*; do
     vg "$want" "$T/in.nrrd"
 done
 vg 1 "$SRC/tests/fuzz/regressions/stack/truncated-deflate-strips.tif"
+for f in "$SRC"/tests/fuzz/regressions/stack/uninit-*.tif; do vg 1 "$f"; done
 vg 1 "$SRC/tests/fuzz/regressions/tar/truncated-deflate-strips.tar"
 vg 0 "$SRC/tests/fuzz/seeds/stack/u16_2pages.tif"
 tu_done
