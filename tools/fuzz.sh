@@ -23,7 +23,9 @@
 # Before a release, fuzz 10 minutes a target with random seeds, two at a
 # time on two cores, and record the executions and findings (the summary
 # lines) in docs/RELIABILITY.md:
-#   tools/fuzz.sh 1                 # builds every harness (1 s each)
+#   tools/fuzz.sh 1                 # builds every harness (1 s each) first:
+#                                   # a relink of the image module under a
+#                                   # running harness crashes it (SIGBUS/SEGV)
 #   tools/fuzz.sh 600 nifti nrrd den raw & tools/fuzz.sh 600 stack tar tf render; wait
 set -euo pipefail
 
