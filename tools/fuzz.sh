@@ -1,14 +1,32 @@
 #!/usr/bin/env bash
-# Fuzz the volume loaders (and the transfer-function parser) with libFuzzer:
+# Fuzz the volume loaders, the transfer-function parser and the renderer
+# with libFuzzer:
 #   tools/fuzz.sh [seconds-per-target] [target...]     (default 20 s, every target)
 # Builds with clang into build-fuzz/ (ASan + UBSan, coverage on the library),
-# seeds each corpus from tests/fuzz/seeds/<target>/, runs each harness for a
-# bounded time (-rss_limit_mb / -malloc_limit_mb 2048: an absurd allocation
-# is a finding too) and prints its execution count.  A crash leaves its input
-# in build-fuzz/crashes/<target>/ and is copied to
-# tests/fuzz/regressions/<target>/, which tests/test_fuzz_regressions.c loads
-# in the normal test suite (commit it with the fix).  VSPLAT_FUZZ_SEED fixes
-# libFuzzer's seed (CI does, so that a run can be repeated; unset: random).
+# runs each harness over its corpus (build-fuzz/corpus/<target>/, which
+# grows run by run, plus the committed tests/fuzz/seeds/<target>/ and the
+# reproducers in tests/fuzz/regressions/<target>/), then fuzzes it for the
+# given time and prints its execution count.  -rss_limit_mb and
+# -malloc_limit_mb 2048: an absurd allocation is a finding too; -timeout
+# 25 s: the first input of fuzz_stack/fuzz_tar loads OpenImageIO's plugins,
+# which took 12 s under ASan on a loaded machine.  A crash, leak, hang or
+# OOM leaves its input in build-fuzz/crashes/<target>/ and is copied to
+# tests/fuzz/regressions/<target>/, which tests/test_fuzz_regressions.c
+# (tests/test_render_fuzz.c for render) replays in the normal test suite:
+# commit it with the fix.
+#
+# VSPLAT_FUZZ_SEED fixes libFuzzer's seed and starts every target from the
+# committed seeds and reproducers only (the grown corpus is cleared), so
+# that a run can be repeated: CI runs `VSPLAT_FUZZ_SEED=1 tools/fuzz.sh 15`
+# (10 targets, about 3 minutes after the build).  Unset: random seeds.
+#
+# Before a release, fuzz 10 minutes a target with random seeds, two at a
+# time on two cores, and record the executions and findings (the summary
+# lines) in docs/RELIABILITY.md:
+#   tools/fuzz.sh 1                 # builds every harness (1 s each) first:
+#                                   # a relink of the image module under a
+#                                   # running harness crashes it (SIGBUS/SEGV)
+#   tools/fuzz.sh 600 nifti nrrd den raw metaimage & tools/fuzz.sh 600 stack tar tf render dicom; wait
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -30,6 +48,7 @@ if [[ ${#targets[@]} -eq 0 ]]; then
     targets=(nifti nrrd den raw stack tar metaimage)
     [[ -f /usr/include/gdcm-3.0/gdcmReader.h ]] && targets+=(dicom)
     [[ -f $ROOT/src/io/tf_file.c ]] && targets+=(tf)
+    targets+=(render)
 fi
 cmake --build "$B" -j"$JOBS" --target "${targets[@]/#/fuzz_}" >/dev/null
 
@@ -42,12 +61,15 @@ for t in "${targets[@]}"; do
     corpus="$B/corpus/$t"
     crashes="$B/crashes/$t"
     rm -rf "$crashes" # earlier findings were copied to tests/fuzz/regressions already
+    if [[ -n ${VSPLAT_FUZZ_SEED:-} ]]; then rm -rf "$corpus"; fi # repeatable: the committed inputs only
     mkdir -p "$corpus" "$crashes"
-    cp -n "$ROOT/tests/fuzz/seeds/$t/"* "$corpus/" 2>/dev/null || true
+    # new inputs go to the first folder; the committed ones are only read
+    dirs=("$corpus")
+    for d in "$ROOT/tests/fuzz/seeds/$t" "$ROOT/tests/fuzz/regressions/$t"; do if [[ -d $d ]]; then dirs+=("$d"); fi; done
     log="$B/fuzz_$t.log"
     echo "== fuzz_$t: $SECS s" >&2
     set +e
-    (cd "$B" && "$B/tests/fuzz/fuzz_$t" "$corpus" ${VSPLAT_FUZZ_SEED:+-seed="$VSPLAT_FUZZ_SEED"} -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 \
+    (cd "$B" && "$B/tests/fuzz/fuzz_$t" "${dirs[@]}" ${VSPLAT_FUZZ_SEED:+-seed="$VSPLAT_FUZZ_SEED"} -max_total_time="$SECS" -timeout=25 -rss_limit_mb=2048 \
         -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$crashes/" >"$log" 2>&1)
     rc=$?
     set -e

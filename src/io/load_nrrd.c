@@ -11,6 +11,7 @@
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
+#include "nrrd_header_check.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -118,6 +119,8 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
             (magic[8] != '\n' && magic[8] != '\r'))
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: not a NRRD file (no NRRD magic at the start)", path);
     }
+    st = vs_nrrd_header_check(ctx, path); /* headers Teem leaks on */
+    if (st != VS_OK) return st;
 
     /* Teem's only switch for its stderr warnings (e.g. data after the end)
      * is this process-wide flag; vsplat never prints, so turn it off. */

@@ -16,6 +16,7 @@
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
+#include "tiff_check.h"
 #include "oiio_adapter.h"
 
 #include <ctype.h>
@@ -231,6 +232,8 @@ vs_status vs_load_image_pages(vs_context *ctx, const char *path, vs_volume **out
     if (!io) return VS_ERR_IO;
     char err[400];
     vs_oiio_reader *r;
+    st = vs_tiff_check(ctx, path, NULL, 0); /* OIIO inflates a cut strip from garbage */
+    if (st != VS_OK) return st;
     st = io->open(path, NULL, 0, &r, err, sizeof err);
     if (st != VS_OK) return vs_set_error(ctx, st, "%s", err);
     int pages = 0;
@@ -354,6 +357,7 @@ vs_status vs_load_folder(vs_context *ctx, const char *path, vs_volume **out)
         char err[400];
         vs_oiio_reader *r;
         snprintf(full, sizeof full, "%s/%s", path, names[z]);
+        if ((st = vs_tiff_check(ctx, full, NULL, 0)) != VS_OK) break;
         st = io->open(full, NULL, 0, &r, err, sizeof err);
         if (st != VS_OK) {
             vs_set_error(ctx, st, "%s: %s", path, err);
@@ -563,6 +567,8 @@ vs_status vs_load_tar(vs_context *ctx, const char *path, vs_volume **out)
         }
         char err[400];
         vs_oiio_reader *r;
+        snprintf(err, sizeof err, "%s: %s", path, m[z].name);
+        if ((st = vs_tiff_check(ctx, err, buf, (size_t)m[z].size)) != VS_OK) break;
         st = io->open(m[z].name, buf, (size_t)m[z].size, &r, err, sizeof err);
         if (st != VS_OK) {
             vs_set_error(ctx, st, "%s: %s", path, err);

@@ -1,0 +1,127 @@
+/* Teem 1.12's NRRD field parsers leak memory on some malformed headers
+ * (issue 24; found by fuzz_nrrd, confirmed with LSan and valgrind): they
+ * allocate, then return an error without freeing, so no cleanup by the
+ * caller can reach it.  Each case is a header that Teem refuses anyway, so
+ * refusing it first loses no valid file:
+ *  - "centers"/"centerings", "kinds", or a "data file" given as a %d
+ *    template or LIST before "dimension" (Teem's per-field mop is leaked
+ *    when it finds it has no dimension yet; the NRRD spec puts dimension
+ *    before every per-axis field);
+ *  - "labels", "units" or "space units" with an unterminated quoted string
+ *    (the string's buffer is leaked);
+ *  - "space units" with more strings than the space has dimensions (the
+ *    extra string is leaked).
+ * The header is the lines up to the first empty line (or the whole file,
+ * for a detached .nhdr). */
+#include "nrrd_header_check.h"
+
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#define LINE_MAX_BYTES (1 << 20)
+
+/* The field name before the first ':' lower-cased without blanks ("data
+ * file" -> "datafile"); "" for comments, key/value pairs and non-fields. */
+static void field_name(const char *line, char *name, size_t cap)
+{
+    size_t j = 0;
+    name[0] = '\0';
+    if (line[0] == '#') return;
+    const char *col = strchr(line, ':');
+    if (!col || col[1] == '=') return;
+    for (const char *p = line; p < col && j + 1 < cap; p++)
+        if (*p != ' ' && *p != '\t') name[j++] = (char)tolower((unsigned char)*p);
+    name[j] = '\0';
+}
+
+/* Counts the quoted strings as Teem's _nrrdGetQuotedString reads them
+ * (blanks between, \" inside); -1 if one is not terminated. */
+static int quoted_strings(const char *s)
+{
+    int n = 0;
+    for (;;) {
+        s += strspn(s, " \t");
+        if (*s != '"') return n;
+        for (s++; *s && *s != '"'; s++)
+            if (s[0] == '\\' && s[1] == '"') s++;
+        if (*s != '"') return -1;
+        s++;
+        n++;
+    }
+}
+
+/* Dimensions of a named space: the "-time"/"...T" spaces have 4. */
+static int space_dim(const char *name)
+{
+    size_t n = strlen(name);
+    while (n && (name[n - 1] == ' ' || name[n - 1] == '\t')) n--;
+    if (n >= 4 && !strncasecmp(name + n - 4, "time", 4)) return 4;
+    if (n == 4 && (name[3] == 't' || name[3] == 'T')) return 4; /* RAST, LAST, LPST */
+    return 3;
+}
+
+static vs_status check_line(vs_context *ctx, const char *path, const char *line, int *have_dim, int *sdim)
+{
+    char name[64];
+    field_name(line, name, sizeof name);
+    if (!*name) return VS_OK;
+    const char *info = strchr(line, ':') + 1;
+    info += strspn(info, " \t");
+    if (!strcmp(name, "dimension")) {
+        *have_dim = 1;
+    } else if (!strcmp(name, "spacedimension")) {
+        *sdim = atoi(info);
+    } else if (!strcmp(name, "space")) {
+        *sdim = space_dim(info);
+    } else if (!*have_dim && (!strcmp(name, "centers") || !strcmp(name, "centerings") || !strcmp(name, "kinds") ||
+                              (!strcmp(name, "datafile") && (strchr(info, '%') || !strncmp(info, "LIST", 4))))) {
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path, name);
+    }
+    if (!strcmp(name, "labels") || !strcmp(name, "units") || !strcmp(name, "spaceunits")) {
+        int n = quoted_strings(info);
+        if (n < 0)
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" has an unterminated quoted string", path,
+                                name);
+        if (!strcmp(name, "spaceunits") && *sdim > 0 && n > *sdim)
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD \"space units\" has %d units for a %d-D space", path,
+                                n, *sdim);
+    }
+    return VS_OK;
+}
+
+vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open", path);
+    char *line = malloc(LINE_MAX_BYTES + 1);
+    if (!line) {
+        fclose(f);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+    }
+    vs_status st = VS_OK;
+    int have_dim = 0, sdim = 0, first = 1;
+    for (;;) {
+        size_t n = 0;
+        int c;
+        while ((c = getc(f)) != EOF && c != '\n') {
+            if (n == LINE_MAX_BYTES) {
+                st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD header line over %d bytes", path, LINE_MAX_BYTES);
+                break;
+            }
+            line[n++] = (char)c;
+        }
+        if (st != VS_OK) break;
+        if (n && line[n - 1] == '\r') n--;
+        line[n] = '\0';
+        if (n == 0 && c != EOF) break; /* end of the header */
+        if (!first) st = check_line(ctx, path, line, &have_dim, &sdim);
+        first = 0;
+        if (st != VS_OK || c == EOF) break;
+    }
+    free(line);
+    fclose(f);
+    return st;
+}
