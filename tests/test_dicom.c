@@ -186,8 +186,8 @@ static void test_written(vs_context *ctx)
     expect_error(ctx, "gap", NULL, "uneven slice spacing: 1.5 mm between most slices but 3 mm");
     expect_error(ctx, "duplicate", NULL, "lie at the same position");
     expect_error(ctx, "no_position", NULL, "no ImagePositionPatient");
-    expect_error(ctx, "truncated_pixels", NULL, "t2: cannot read the image");
-    expect_error(ctx, "truncated_header", NULL, "t5: looks like DICOM but cannot be read");
+    expect_error(ctx, "truncated_pixels", NULL, "t2: malformed DICOM: element (7fe0,0010) claims");
+    expect_error(ctx, "truncated_header", NULL, "t5: malformed DICOM: element (0020,000e) claims");
     vs_volume_release(ob);
 }
 
@@ -225,7 +225,8 @@ static void test_real(vs_context *ctx)
 
 /* tests/fuzz/regressions/dicom/: inputs of fuzz_dicom.c (first byte: how
  * many equal parts, 1 to 3, the rest is cut into, one file each) that once
- * ended the process; each must now load or fail with a message. */
+ * ended the process or used gigabytes; each must now load or fail with a
+ * message. */
 static void test_regressions(vs_context *ctx, const char *src)
 {
     char rdir[4096], dir[4096], p[8300];
@@ -262,6 +263,11 @@ static void test_regressions(vs_context *ctx, const char *src)
         vs_status st = vs_volume_load(ctx, dir, NULL, &v);
         CHECK(st == VS_OK || (v == NULL && *vs_last_error(ctx)), "regression %s: status %d, no message", e->d_name,
               (int)st);
+        /* oom-*: an element claiming gigabytes made GDCM's child touch them;
+         * refused from the lengths before GDCM reads the file */
+        if (!strncmp(e->d_name, "oom-", 4))
+            CHECK(st != VS_OK && strstr(vs_last_error(ctx), "claims"), "regression %s: not refused by length: %s",
+                  e->d_name, vs_last_error(ctx));
         if (st == VS_OK) vs_volume_release(v);
         n++;
     }

@@ -5,6 +5,7 @@
  * transform (DICOM's LPS turned into RAS). */
 #include "context.h"
 #include "dicom_adapter.h"
+#include "dicom_check.h"
 #include "dicom_guard.h"
 #include "load.h"
 #include "load_common.h"
@@ -467,7 +468,9 @@ vs_status vs_load_dicom(vs_context *ctx, const char *path, const char *pick, vs_
         char err[256] = "";
         char *one[1] = {(char *)path};
         int failed;
-        vs_status st = vs_dicom_headers_guarded(api, one, 1, &own, &failed, err, sizeof err);
+        vs_status st = vs_dicom_check(ctx, path);
+        if (st != VS_OK) return st;
+        st = vs_dicom_headers_guarded(api, one, 1, &own, &failed, err, sizeof err);
         if (st != VS_OK) return vs_set_error(ctx, st, "%s: %s", path, err);
         const char *slash = strrchr(path, '/');
         dir = slash ? strndup(path, (size_t)(slash - path) + (slash == path)) : strdup(".");
@@ -480,6 +483,7 @@ vs_status vs_load_dicom(vs_context *ctx, const char *path, const char *pick, vs_
     if (st == VS_OK && !s) st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     vs_dicom_header *hs = st == VS_OK ? calloc((size_t)(nn ? nn : 1), sizeof *hs) : NULL;
     if (st == VS_OK && !hs) st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+    for (int i = 0; st == VS_OK && i < nn; i++) st = vs_dicom_check(ctx, names[i]);
     if (st == VS_OK) {
         char err[256] = "";
         int failed = 0;

@@ -1,0 +1,92 @@
+/* GDCM allocates an element's value from the length the file states before
+ * it reads it: an 870-byte file whose element claims 4 GB made the parsing
+ * child touch 4 GB (found by tests/fuzz/fuzz_dicom.c).  This walks the
+ * top-level elements (file meta, then the data set in its transfer syntax)
+ * and refuses a defined length that runs past the end of the file; an
+ * undefined length (sequences, encapsulated pixel data) or big-endian data
+ * ends the walk, leaving the rest to GDCM.  Only lengths are checked, so no
+ * file GDCM reads correctly is refused. */
+#include "dicom_check.h"
+
+#include <errno.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* Value representations whose length field is 4 bytes after 2 reserved ones
+ * (explicit VR); the others have a 2-byte length. */
+static int long_vr(const unsigned char vr[2])
+{
+    static const char *const v[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV", "UC", "UN", "UR", "UT", "UV"};
+    for (size_t i = 0; i < sizeof v / sizeof *v; i++)
+        if (vr[0] == (unsigned char)v[i][0] && vr[1] == (unsigned char)v[i][1]) return 1;
+    return 0;
+}
+static int known_vr(const unsigned char vr[2])
+{
+    static const char *const v[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT", "FD", "FL", "IS", "LO", "LT", "PN",
+                                    "SH", "SL", "SS", "ST", "TM", "UI", "UL", "US"};
+    if (long_vr(vr)) return 1;
+    for (size_t i = 0; i < sizeof v / sizeof *v; i++)
+        if (vr[0] == (unsigned char)v[i][0] && vr[1] == (unsigned char)v[i][1]) return 1;
+    return 0;
+}
+
+vs_status vs_dicom_check(vs_context *ctx, const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat sb;
+    if (fstat(fileno(f), &sb) != 0) {
+        fclose(f);
+        return vs_set_error(ctx, VS_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+    }
+    const uint64_t size = (uint64_t)sb.st_size;
+    unsigned char b[132];
+    uint64_t pos = 0;
+    if (fread(b, 1, sizeof b, f) == sizeof b && !memcmp(b + 128, "DICM", 4)) pos = 132;
+    int in_meta = 1, explicit_vr = -1; /* -1: the data set's VR rule not known yet */
+    vs_status st = VS_OK;
+    char ts[65] = "";
+    while (st == VS_OK && pos + 8 <= size) {
+        unsigned char e[12];
+        if (fseeko(f, (off_t)pos, SEEK_SET) != 0 || fread(e, 1, 8, f) != 8) break;
+        const unsigned group = e[0] | e[1] << 8u, elem = e[2] | e[3] << 8u;
+        if (in_meta && group != 0x0002) {
+            in_meta = 0;
+            /* the meta group names the data set's syntax; without one, the
+             * first element tells (as vs_dicom_sniff does) */
+            if (!strcmp(ts, "1.2.840.10008.1.2")) explicit_vr = 0;
+            else if (!strcmp(ts, "1.2.840.10008.1.2.2")) break; /* big endian: left to GDCM */
+            else if (ts[0]) explicit_vr = 1;
+        }
+        const int ex = in_meta || (explicit_vr < 0 ? known_vr(e + 4) : explicit_vr);
+        if (!in_meta && explicit_vr < 0) explicit_vr = ex;
+        uint64_t len, head = 8;
+        if (ex && known_vr(e + 4) && !long_vr(e + 4)) {
+            len = e[6] | e[7] << 8u;
+        } else if (ex && known_vr(e + 4)) {
+            if (fread(e + 8, 1, 4, f) != 4) break;
+            len = e[8] | e[9] << 8u | (uint64_t)e[10] << 16u | (uint64_t)e[11] << 24u;
+            head = 12;
+        } else { /* implicit VR, or an unknown VR read as GDCM falls back */
+            len = e[4] | e[5] << 8u | (uint64_t)e[6] << 16u | (uint64_t)e[7] << 24u;
+        }
+        if (len == 0xFFFFFFFFu) break; /* undefined: GDCM walks it */
+        if (len > size - pos - head) {
+            st = vs_set_error(ctx, VS_ERR_FORMAT,
+                              "%s: malformed DICOM: element (%04x,%04x) claims %llu bytes, the file has %llu left", path,
+                              group, elem, (unsigned long long)len, (unsigned long long)(size - pos - head));
+            break;
+        }
+        if (in_meta && group == 0x0002 && elem == 0x0010 && len < sizeof ts) {
+            if (fread(ts, 1, (size_t)len, f) != len) break;
+            ts[len] = '\0';
+            for (size_t i = strlen(ts); i > 0 && (ts[i - 1] == ' ' || ts[i - 1] == '\0'); i--) ts[i - 1] = '\0';
+        }
+        pos += head + len;
+    }
+    fclose(f);
+    return st;
+}
