@@ -443,7 +443,7 @@ static void test_image_api(void)
 
 /* ------------------------------------------------------------ NaN / Inf voxels */
 
-/* Policy (README "Stiff cases"): non-finite voxels are accepted; they are
+/* Policy (docs/PERFORMANCE.md "Stiff cases"): non-finite voxels are accepted; they are
  * left out of the value range and the default iso-value, and every
  * pipeline and the ray caster render them as 0.  So the image must be
  * finite, and close to the image of the same volume with those voxels set

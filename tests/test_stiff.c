@@ -606,7 +606,7 @@ static void cases_aniso(void)
  * between it and 0, the ray caster (which reads 0 outside the volume) would
  * also show the volume's faces, which splatting (no voxels there) does not;
  * that difference is about the border convention, not about extreme
- * values, and README "Stiff cases" notes it. */
+ * values, and docs/PERFORMANCE.md "Stiff cases" notes it. */
 static void cases_values(void)
 {
     const double sp[3] = {1, 1, 1};
