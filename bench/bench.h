@@ -82,6 +82,21 @@ const char *bench_data_dir(const char *override);
  * 0 on success, -1 on a load error (message printed). */
 int bench_load(const bench_opts *o, const char *key, vs_volume **out);
 
+/* The volumes, classifications and first views that `peers` and `oracle`
+ * share (data.c), with a synthetic stand-in for --quick. */
+typedef struct bench_peer_case {
+    const char *name;         /* printed, CSV, PNG name                    */
+    const char *input;        /* bench_load key (real data)                */
+    const char *quick;        /* bench_load key with --quick (synthetic)   */
+    double iso, ramp, az, el; /* real data                                 */
+    double qiso, qramp;       /* the synthetic stand-in                    */
+} bench_peer_case;
+extern const bench_peer_case bench_peer_cases[];
+extern const int bench_npeer_cases;
+/* Their settings: the size (512², --quick 128²), the first view (angles in
+ * the world frame), the iso-range and ramp, --threads (default 2). */
+void bench_peer_settings(const bench_opts *o, const bench_peer_case *pc, vs_settings *s);
+
 /* ---- results.c ---- */
 /* Create the results folder (and parents).  Returns 0 or prints and returns 1. */
 int bench_results_dir(const bench_opts *o);

@@ -2,6 +2,8 @@
  * (file names, raw layout and spacing from /work/shared/data/MANIFEST.md). */
 #include "bench.h"
 
+#include <math.h>
+
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -92,4 +94,24 @@ int bench_load(const bench_opts *o, const char *key, vs_volume **out)
     }
     vs_context_release(ctx);
     return 0;
+}
+
+const bench_peer_case bench_peer_cases[] = {
+    {"colin27", "colin27", "scene:head:128", 45, 10, 180, 0, 0.5, 0.1},
+    {"ct-head", "ct", "scene:head:128", 400, 100, 180, 15, 0.25, 0.03},
+};
+const int bench_npeer_cases = (int)(sizeof bench_peer_cases / sizeof bench_peer_cases[0]);
+
+void bench_peer_settings(const bench_opts *o, const bench_peer_case *pc, vs_settings *s)
+{
+    vs_settings_init(s);
+    s->width = s->height = o->quick ? 128 : 512;
+    s->view = VS_VIEW_ANGLES;
+    s->azimuth = pc->az;
+    s->elevation = pc->el;
+    s->has_iso = 1;
+    s->iso_lo = o->quick ? pc->qiso : pc->iso;
+    s->iso_hi = INFINITY;
+    s->ramp = o->quick ? pc->qramp : pc->ramp;
+    s->threads = o->threads ? o->threads : 2;
 }

@@ -15,8 +15,8 @@
  * hidden voxels are never projected, tested or splatted, and the sheets
  * shrink to what the front voxels touch.  Voxels in front of the first
  * opacity are transparent already, so the relevant-voxel list drops them.
- * Orthographic views only (as the peers mode); the same volumes, iso-ranges
- * and 12 views as `vsplat-bench peers`. */
+ * Orthographic views only; the same volumes, iso-ranges and 12 views as
+ * `vsplat-bench peers` (bench_peer_cases). */
 #include "bench.h"
 
 #include <math.h>
@@ -25,16 +25,6 @@
 #include <string.h>
 
 #define ORACLE_OPAQUE 0.999 /* stricter than the renderer's 0.995 threshold */
-
-typedef struct oracle_def {
-    const char *name, *input, *quick;
-    double iso, ramp, az, el, qiso, qramp;
-} oracle_def;
-
-static const oracle_def oracle_defs[] = {
-    {"colin27", "colin27", "scene:head:128", 45, 10, 180, 0, 0.5, 0.1},
-    {"ct-head", "ct", "scene:head:128", 400, 100, 180, 15, 0.25, 0.03},
-};
 
 /* The classification of docs/DESIGN.md §2: 0 at iso - ramp, 1 at iso + ramp. */
 static double ramp_alpha(double v, double iso, double ramp)
@@ -69,24 +59,31 @@ static double sample(const grid *g, const double x[3])
     return (c00 * (1 - t[1]) + c10 * t[1]) * (1 - t[2]) + (c01 * (1 - t[1]) + c11 * t[1]) * t[2];
 }
 
-/* The camera of src/camera.c for AZ, EL (as mode_peers.c): rows right, up, dir. */
-static void view_axes(double az, double el, double right[3], double up[3], double dir[3])
+/* The viewing direction in the grid frame (mm along the index axes), from
+ * the library's camera, and two unit vectors across it: any pair serves,
+ * as lines of sight and voxels are placed on the same plane. */
+static int view_axes(vs_context *ctx, const vs_volume *vol, const vs_settings *s, const double sp[3], double R[3],
+                     double U[3], double D[3])
 {
-    const double deg = M_PI / 180.0;
-    double ca = cos(az * deg), sa = sin(az * deg), ce = cos(el * deg), se = sin(el * deg);
-    const double d[3] = {-sa * ce, ca * ce, -se}, r[3] = {ca, sa, 0.0}, u[3] = {-sa * se, ca * se, ce};
-    memcpy(dir, d, sizeof d);
-    memcpy(right, r, sizeof r);
-    memcpy(up, u, sizeof u);
+    double di[3], eye[3];
+    if (vs_view_in_index(ctx, vol, s, di, eye) != VS_OK) return 1;
+    double n = 0.0;
+    for (int a = 0; a < 3; a++) D[a] = di[a] * sp[a], n += D[a] * D[a];
+    n = sqrt(n);
+    for (int a = 0; a < 3; a++) D[a] /= n;
+    const double t[3] = {fabs(D[0]) < 0.9 ? 1.0 : 0.0, fabs(D[0]) < 0.9 ? 0.0 : 1.0, 0.0};
+    R[0] = t[1] * D[2] - t[2] * D[1], R[1] = t[2] * D[0] - t[0] * D[2], R[2] = t[0] * D[1] - t[1] * D[0];
+    n = sqrt(R[0] * R[0] + R[1] * R[1] + R[2] * R[2]);
+    for (int a = 0; a < 3; a++) R[a] /= n;
+    U[0] = D[1] * R[2] - D[2] * R[1], U[1] = D[2] * R[0] - D[0] * R[2], U[2] = D[0] * R[1] - D[1] * R[0];
+    return 0;
 }
 
 /* Writes the oracle voxels into `dst` (a copy of the source's voxels) and
  * returns how many were made air. */
 static size_t oracle_cull(const grid *g, vs_volume *dst, double air, size_t keep, double iso, double ramp,
-                          double az, double el)
+                          const double R[3], const double U[3], const double D[3])
 {
-    double R[3], U[3], D[3];
-    view_axes(az, el, R, U, D);
     double spmin = fmin(g->sp[0], fmin(g->sp[1], g->sp[2]));
     double spmax = fmax(g->sp[0], fmax(g->sp[1], g->sp[2]));
     const double h = spmin;        /* line-of-sight spacing on the image plane */
@@ -200,18 +197,20 @@ typedef struct oracle_view {
     size_t culled;
 } oracle_view;
 
-static int run_oracle(const bench_opts *o, const oracle_def *od, FILE *csv)
+static int run_oracle(const bench_opts *o, const bench_peer_case *od, FILE *csv)
 {
     const char *key = o->quick ? od->quick : od->input;
     vs_volume *vol = NULL;
     int ls = bench_load(o, key, &vol);
     if (ls) return ls < 0;
-    const int size = o->quick ? 128 : 512;
     const int nviews = o->quick ? 4 : 12;
     const int runs = bench_runs(o, 3, 1);
-    const int threads = o->threads ? o->threads : 2;
-    const double iso = o->quick ? od->qiso : od->iso, ramp = o->quick ? od->qramp : od->ramp;
     int failed = 0;
+    vs_settings base;
+    bench_peer_settings(o, od, &base);
+    base.pipeline = VS_PIPELINE_POST_CD;
+    const int size = base.width, threads = base.threads;
+    const double iso = base.iso_lo, ramp = base.ramp;
 
     grid g;
     vs_volume_dims(vol, g.n);
@@ -244,16 +243,6 @@ static int run_oracle(const bench_opts *o, const oracle_def *od, FILE *csv)
     }
     g.f = f;
 
-    vs_settings base;
-    vs_settings_init(&base);
-    base.width = base.height = size;
-    base.elevation = od->el;
-    base.has_iso = 1;
-    base.iso_lo = iso;
-    base.iso_hi = INFINITY;
-    base.ramp = ramp;
-    base.threads = threads;
-    base.pipeline = VS_PIPELINE_POST_CD;
 
     /* the oracle volumes, and both renders of every view once: warm-up, work
      * counters and the picture check */
@@ -269,7 +258,15 @@ static int run_oracle(const bench_opts *o, const oracle_def *od, FILE *csv)
             break;
         }
         memcpy(vs_volume_data(ov[v].vol), vs_volume_data(vol), n * type_bytes(vs_volume_type(vol)));
-        ov[v].culled = oracle_cull(&g, ov[v].vol, air, keep, iso, ramp, az, od->el);
+        vs_settings vs = base;
+        vs.azimuth = az;
+        double R[3], U[3], D[3];
+        if (view_axes(full, vol, &vs, g.sp, R, U, D)) {
+            fprintf(stderr, "vsplat-bench: oracle %s: %s\n", od->name, vs_last_error(full));
+            failed = 1;
+            break;
+        }
+        ov[v].culled = oracle_cull(&g, ov[v].vol, air, keep, iso, ramp, R, U, D);
         vs_volume_update_range(ov[v].vol);
         culled += ov[v].culled;
         vs_settings s = base;
@@ -362,8 +359,7 @@ int bench_oracle(const bench_opts *o)
            "from a ray march of the same iso-range), frames interleaved, medians; machine: %s; load average %s\n",
            bench_machine(), bench_loadavg());
     int failed = 0;
-    for (size_t i = 0; i < sizeof oracle_defs / sizeof *oracle_defs; i++)
-        failed += run_oracle(o, &oracle_defs[i], csv);
+    for (int i = 0; i < bench_npeer_cases; i++) failed += run_oracle(o, &bench_peer_cases[i], csv);
     fclose(csv);
     return failed ? 2 : 0;
 }

@@ -43,19 +43,6 @@
 #ifdef VSPLAT_HAVE_VOLPACK
 #include <volpack.h>
 
-typedef struct peer_def {
-    const char *name;   /* printed, CSV, PNG name                         */
-    const char *input;  /* bench_load key (real data)                     */
-    const char *quick;  /* bench_load key with --quick (synthetic)         */
-    double iso, ramp, az, el;       /* real data                           */
-    double qiso, qramp;             /* the synthetic stand-in              */
-} peer_def;
-
-static const peer_def peer_defs[] = {
-    {"colin27", "colin27", "scene:head:128", 45, 10, 180, 0, 0.5, 0.1},
-    {"ct-head", "ct", "scene:head:128", 400, 100, 180, 15, 0.25, 0.03},
-};
-#define NPEERS ((int)(sizeof peer_defs / sizeof peer_defs[0]))
 
 /* ---- VolPack ---- */
 
@@ -295,29 +282,20 @@ static void side_by_side(const bench_opts *o, const char *name, const vs_image *
     free(s.rgba);
 }
 
-static int run_peer(const bench_opts *o, const peer_def *pd, FILE *csv)
+static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
 {
     const char *key = o->quick ? pd->quick : pd->input;
     vs_volume *vol = NULL;
     int ls = bench_load(o, key, &vol);
     if (ls) return ls < 0;
-    const int size = o->quick ? 128 : 512;
     const int nviews = o->quick ? 4 : 12;
     const int runs = bench_runs(o, 3, 1);
-    const int threads = o->threads ? o->threads : 2;
-    const double iso = o->quick ? pd->qiso : pd->iso, ramp = o->quick ? pd->qramp : pd->ramp;
     int failed = 0;
 
     vs_settings base;
-    vs_settings_init(&base);
-    base.width = base.height = size;
-    base.azimuth = pd->az;
-    base.elevation = pd->el;
-    base.has_iso = 1;
-    base.iso_lo = iso;
-    base.iso_hi = INFINITY;
-    base.ramp = ramp;
-    base.threads = threads;
+    bench_peer_settings(o, pd, &base);
+    const int size = base.width, threads = base.threads;
+    const double iso = base.iso_lo, ramp = base.ramp;
 
     static const vs_pipeline pipes[NVS] = {VS_PIPELINE_POST_CD, VS_PIPELINE_PRE, VS_PIPELINE_POST_GS,
                                            VS_PIPELINE_POST_ALPHA};
@@ -489,7 +467,7 @@ int bench_peers(const bench_opts *o)
            "caster; machine: %s; load average %s\n",
            o->threads ? o->threads : 2, bench_machine(), bench_loadavg());
     int failed = 0;
-    for (int i = 0; i < NPEERS; i++) failed += run_peer(o, &peer_defs[i], csv);
+    for (int i = 0; i < bench_npeer_cases; i++) failed += run_peer(o, &bench_peer_cases[i], csv);
     fclose(csv);
     return failed ? 2 : 0;
 }
