@@ -274,6 +274,8 @@ VS_API const char *vs_pipeline_name(vs_pipeline p);
 VS_API vs_status vs_pipeline_parse(const char *name, vs_pipeline *out);
 VS_API const char *vs_isa_name(vs_isa isa);
 VS_API vs_status vs_isa_parse(const char *name, vs_isa *out);
+/* "anterior", "posterior", "left", "right", "superior", "inferior" (any case) */
+VS_API vs_status vs_view_parse(const char *name, vs_view *out);
 /* best ISA this CPU and OS support */
 VS_API vs_isa vs_isa_detect(void);
 

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 vs_status vs_context_create(vs_context **out)
 {
@@ -116,6 +117,20 @@ vs_status vs_isa_parse(const char *name, vs_isa *out)
     for (int i = 0; i <= VS_ISA_AVX512; i++)
         if (!strcmp(name, isa_names[i])) {
             *out = (vs_isa)i;
+            return VS_OK;
+        }
+    return VS_ERR_INVALID_ARGUMENT;
+}
+
+/* VS_VIEW_ANTERIOR.. in enum order */
+static const char *const view_names[] = {"anterior", "posterior", "left", "right", "superior", "inferior"};
+
+vs_status vs_view_parse(const char *name, vs_view *out)
+{
+    if (!name || !out) return VS_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < (int)(sizeof view_names / sizeof *view_names); i++)
+        if (!strcasecmp(name, view_names[i])) {
+            *out = (vs_view)(VS_VIEW_ANTERIOR + i);
             return VS_OK;
         }
     return VS_ERR_INVALID_ARGUMENT;

@@ -456,6 +456,10 @@ int main(void)
               "az 90, x stored reversed: dir %g %g %g (want 1 0 0)", dir[0], dir[1], dir[2]);
         CHECK(eye[0] < 0.0 && fabs(eye[1] - 9.5) < 1e-9 && fabs(eye[2] - 14.5) < 1e-9,
               "perspective eye %g %g %g: not before the centre against dir", eye[0], eye[1], eye[2]);
+        vs_view pv = VS_VIEW_AUTO;
+        CHECK(vs_view_parse("Left", &pv) == VS_OK && pv == VS_VIEW_LEFT && vs_view_parse("inferior", &pv) == VS_OK &&
+                  pv == VS_VIEW_INFERIOR && vs_view_parse("sideways", &pv) != VS_OK,
+              "vs_view_parse");
         const double singular[12] = {1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0};
         CHECK(vs_volume_set_transform(ctx, v, singular) != VS_OK, "a singular transform was taken");
         vs_volume_release(v);

@@ -325,17 +325,10 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_FPS: sn->fps = 1; return parse_range_double(n, v, 0.0, 100.0, 1, &o->fps, err, cap);
     case O_SIZE: return parse_size(v, s, err, cap);
     case O_VIEW: {
-        static const struct {
-            const char *name;
-            vs_view v;
-        } views[] = {{"anterior", VS_VIEW_ANTERIOR}, {"posterior", VS_VIEW_POSTERIOR}, {"left", VS_VIEW_LEFT},
-                     {"right", VS_VIEW_RIGHT},       {"superior", VS_VIEW_SUPERIOR},   {"inferior", VS_VIEW_INFERIOR}};
-        for (size_t i = 0; i < sizeof views / sizeof views[0]; i++)
-            if (!strcasecmp(v, views[i].name)) {
-                s->view = views[i].v;
-                s->azimuth = s->elevation = 0.0;
-                return 0;
-            }
+        if (vs_view_parse(v, &s->view) == VS_OK) {
+            s->azimuth = s->elevation = 0.0;
+            return 0;
+        }
         if (!to_doubles(v, 2, t))
             return fail(err, cap,
                         "--view: expected anterior, posterior, left, right, superior, inferior or AZ,EL in "

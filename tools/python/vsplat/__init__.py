@@ -385,10 +385,7 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
         w, h = (size, size) if np.isscalar(size) else size
         s.width, s.height = int(w), int(h)
     if isinstance(view, str):
-        names = ("anterior", "posterior", "left", "right", "superior", "inferior")
-        if view not in names:
-            raise Error("render: view %r: one of %s, or (azimuth, elevation)" % (view, ", ".join(names)))
-        s.view = 2 + names.index(view)  # VS_VIEW_ANTERIOR..VS_VIEW_INFERIOR
+        s.view = _enum(_LIB.vs_view_parse, "view", view)
     elif view is not None:
         s.view = 1  # VS_VIEW_ANGLES: the angles alone, as vsplat --view AZ,EL
         s.azimuth, s.elevation = (float(x) for x in view)

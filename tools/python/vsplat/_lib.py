@@ -116,6 +116,7 @@ _PROTOTYPES = {
     "vs_pipeline_parse": (c_int, [c_char_p, P(c_int)]),
     "vs_pipeline_name": (c_char_p, [c_int]),
     "vs_isa_parse": (c_int, [c_char_p, P(c_int)]),
+    "vs_view_parse": (c_int, [c_char_p, P(c_int)]),
     "vs_volume_load": (c_int, [c_void_p, c_char_p, P(LoadOptions), P(c_void_p)]),
     "vs_volume_scene": (c_int, [c_void_p, c_char_p, P(c_void_p)]),
     "vs_volume_wrap": (c_int, [c_void_p, c_int, P(c_int), P(c_size_t), P(c_double), c_void_p, RELEASE_FN,
