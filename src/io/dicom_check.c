@@ -1,11 +1,12 @@
 /* GDCM allocates an element's value from the length the file states before
  * it reads it: an 870-byte file whose element claims 4 GB made the parsing
  * child touch 4 GB (found by tests/fuzz/fuzz_dicom.c).  This walks the
- * top-level elements (file meta, then the data set in its transfer syntax)
- * and refuses a defined length that runs past the end of the file; an
- * undefined length (sequences, encapsulated pixel data) or big-endian data
- * ends the walk, leaving the rest to GDCM.  Only lengths are checked, so no
- * file GDCM reads correctly is refused. */
+ * elements as one stream (file meta, then the data set in its transfer
+ * syntax; a sequence or encapsulated pixel data of undefined length is
+ * walked into, its items and fragments too) and refuses a defined length
+ * that runs past the end of the file.  Big-endian and deflated data sets
+ * end the walk, leaving them to GDCM.  Only lengths are checked, so no file
+ * GDCM reads correctly is refused. */
 #include "dicom_check.h"
 
 #include <errno.h>
@@ -58,10 +59,12 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
             /* the meta group names the data set's syntax; without one, the
              * first element tells (as vs_dicom_sniff does) */
             if (!strcmp(ts, "1.2.840.10008.1.2")) explicit_vr = 0;
-            else if (!strcmp(ts, "1.2.840.10008.1.2.2")) break; /* big endian: left to GDCM */
+            else if (!strcmp(ts, "1.2.840.10008.1.2.2") || !strcmp(ts, "1.2.840.10008.1.2.1.99"))
+                break; /* big endian, deflated: left to GDCM */
             else if (ts[0]) explicit_vr = 1;
         }
-        const int ex = in_meta || (explicit_vr < 0 ? known_vr(e + 4) : explicit_vr);
+        /* items and delimiters (group FFFE) have no VR in any syntax */
+        const int ex = group != 0xFFFEu && (in_meta || (explicit_vr < 0 ? known_vr(e + 4) : explicit_vr));
         if (!in_meta && explicit_vr < 0) explicit_vr = ex;
         uint64_t len, head = 8;
         if (ex && known_vr(e + 4) && !long_vr(e + 4)) {
@@ -73,7 +76,10 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
         } else { /* implicit VR, or an unknown VR read as GDCM falls back */
             len = e[4] | e[5] << 8u | (uint64_t)e[6] << 16u | (uint64_t)e[7] << 24u;
         }
-        if (len == 0xFFFFFFFFu) break; /* undefined: GDCM walks it */
+        if (len == 0xFFFFFFFFu || (group == 0xFFFEu && elem != 0xE000u)) {
+            pos += head; /* undefined length: its items follow; delimiters: nothing */
+            continue;
+        }
         if (len > size - pos - head) {
             st = vs_set_error(ctx, VS_ERR_FORMAT,
                               "%s: malformed DICOM: element (%04x,%04x) claims %llu bytes, the file has %llu left", path,

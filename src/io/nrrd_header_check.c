@@ -9,8 +9,9 @@
  *    before every per-axis field);
  *  - "labels", "units" or "space units" with an unterminated quoted string
  *    (the string's buffer is leaked);
- *  - "space units" with more strings than the space has dimensions (the
- *    extra string is leaked).
+ *  - "labels", "units" or "space units" with another number of strings
+ *    than the axes (or the space's dimensions) they describe: fewer leak
+ *    the strings read before the missing one, more leak the extra one.
  * The header is the lines up to the first empty line (or the whole file,
  * for a detached .nhdr). */
 #include "nrrd_header_check.h"
@@ -63,7 +64,7 @@ static int space_dim(const char *name)
     return 3;
 }
 
-static vs_status check_line(vs_context *ctx, const char *path, const char *line, int *have_dim, int *sdim)
+static vs_status check_line(vs_context *ctx, const char *path, const char *line, int *dim, int *sdim)
 {
     char name[64];
     field_name(line, name, sizeof name);
@@ -71,12 +72,12 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
     const char *info = strchr(line, ':') + 1;
     info += strspn(info, " \t");
     if (!strcmp(name, "dimension")) {
-        *have_dim = 1;
+        *dim = atoi(info) > 0 ? atoi(info) : -1; /* -1: given, not a count */
     } else if (!strcmp(name, "spacedimension")) {
         *sdim = atoi(info);
     } else if (!strcmp(name, "space")) {
         *sdim = space_dim(info);
-    } else if (!*have_dim && (!strcmp(name, "centers") || !strcmp(name, "centerings") || !strcmp(name, "kinds") ||
+    } else if (!*dim && (!strcmp(name, "centers") || !strcmp(name, "centerings") || !strcmp(name, "kinds") ||
                               (!strcmp(name, "datafile") && (strchr(info, '%') || !strncmp(info, "LIST", 4))))) {
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path, name);
     }
@@ -85,9 +86,10 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
         if (n < 0)
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" has an unterminated quoted string", path,
                                 name);
-        if (!strcmp(name, "spaceunits") && *sdim > 0 && n > *sdim)
-            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD \"space units\" has %d units for a %d-D space", path,
-                                n, *sdim);
+        const int want = !strcmp(name, "spaceunits") ? *sdim : *dim;
+        if (want > 0 && n != want)
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" has %d strings for %d %s", path, name, n,
+                                want, !strcmp(name, "spaceunits") ? "space dimensions" : "axes");
     }
     return VS_OK;
 }
@@ -102,7 +104,7 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     vs_status st = VS_OK;
-    int have_dim = 0, sdim = 0, first = 1;
+    int dim = 0, sdim = 0, first = 1;
     for (;;) {
         size_t n = 0;
         int c;
@@ -117,7 +119,7 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
         if (n && line[n - 1] == '\r') n--;
         line[n] = '\0';
         if (n == 0 && c != EOF) break; /* end of the header */
-        if (!first) st = check_line(ctx, path, line, &have_dim, &sdim);
+        if (!first) st = check_line(ctx, path, line, &dim, &sdim);
         first = 0;
         if (st != VS_OK || c == EOF) break;
     }
