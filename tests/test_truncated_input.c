@@ -151,9 +151,9 @@ static void test_nrrd(void)
         {"NRRD0004\ntype: float\ndimension: 3\nlabels: \"x\n", "unterminated"},
         {"NRRD0004\ntype: float\ndimension: 3\nunits: \"mm\" \"mm\n", "unterminated"},
         {"NRRD0004\ntype: float\ndimension: 3\nspace dimension: 3\nspace units: \"mm\" \"mm\" \"mm\" \"mm\"\n",
-         "units for a 3-D space"},
+         "\"space units\" has 4 strings for 3 space dimensions"},
         {"NRRD0004\ntype: float\ndimension: 3\nspace: RAST\nspace units: \"mm\" \"mm\" \"mm\" \"s\" \"x\"\n",
-         "units for a 4-D space"},
+         "\"space units\" has 5 strings for 4 space dimensions"},
     };
     char path[1200];
     snprintf(path, sizeof path, "%s/h.nrrd", tmp);

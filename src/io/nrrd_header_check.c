@@ -64,6 +64,14 @@ static int space_dim(const char *name)
     return 3;
 }
 
+/* The field as NRRD files spell it, for messages. */
+static const char *spelled(const char *name)
+{
+    if (!strcmp(name, "spaceunits")) return "space units";
+    if (!strcmp(name, "datafile")) return "data file";
+    return name;
+}
+
 static vs_status check_line(vs_context *ctx, const char *path, const char *line, int *dim, int *sdim)
 {
     char name[64];
@@ -79,16 +87,18 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
         *sdim = space_dim(info);
     } else if (!*dim && (!strcmp(name, "centers") || !strcmp(name, "centerings") || !strcmp(name, "kinds") ||
                               (!strcmp(name, "datafile") && (strchr(info, '%') || !strncmp(info, "LIST", 4))))) {
-        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path, name);
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path,
+                            spelled(name));
     }
     if (!strcmp(name, "labels") || !strcmp(name, "units") || !strcmp(name, "spaceunits")) {
         int n = quoted_strings(info);
         if (n < 0)
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" has an unterminated quoted string", path,
-                                name);
+                                spelled(name));
         const int want = !strcmp(name, "spaceunits") ? *sdim : *dim;
         if (want > 0 && n != want)
-            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" has %d strings for %d %s", path, name, n,
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" has %d strings for %d %s", path,
+                                spelled(name), n,
                                 want, !strcmp(name, "spaceunits") ? "space dimensions" : "axes");
     }
     return VS_OK;
