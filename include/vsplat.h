@@ -206,9 +206,20 @@ typedef struct vs_settings {
     /* pre-integrated classification between sheets (post-cd, post-gs): each
      * pixel's segment from one sheet to the next classified from both
      * densities through a 2-D table.  -1 (default): on with a transfer
-     * function or an iso opacity under 1 (translucent classification), off
-     * for an opaque iso-range; 0 off; 1 on */
+     * function or an iso opacity under 1 (translucent classification) or
+     * when a coarser level of detail is splatted, off for an opaque
+     * iso-range at full resolution; 0 off; 1 on */
     int preintegration;
+
+    /* levels of detail: a volume seen small is splatted from a low-pass
+     * filtered copy decimated by 2 per axis, the coarsest whose voxels lie
+     * at most lod_pixels apart on the image (along the volume's finest
+     * axis; under perspective at its nearest point; half that for pre and
+     * post-alpha, which have no pre-integration), so that a frame costs
+     * what its pixels cost.  Default 1; 0 renders full resolution.  The
+     * levels are built on first use and kept in the context.  Not with a
+     * crop box (full resolution there). */
+    double lod_pixels;
 } vs_settings;
 
 typedef struct vs_stage_times {
@@ -249,6 +260,10 @@ typedef struct vs_stats {
     uint64_t pixels_classified;/* sheet pixels classified (gradient)             */
     uint64_t pixels_shaded;    /* of those, with opacity: shaded and composited  */
     vs_stage_bytes bytes_read, bytes_written;
+
+    double ms_lod;             /* building levels of detail (if any were built)  */
+    int lod_level;             /* level splatted: 0 full resolution, L: voxels
+                                  2^L times the volume's spacing apart        */
 } vs_stats;
 
 /* A rendered image: straight RGBA float, row 0 at the top. */

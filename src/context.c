@@ -3,6 +3,7 @@
 #include "shade_lut.h"
 #include "pool.h"
 #include "preintegrate.h"
+#include "lod.h"
 #include "relevant.h"
 
 #include <dlfcn.h>
@@ -26,6 +27,7 @@ void vs_context_release(vs_context *ctx)
     if (!ctx) return;
     vs_pool_destroy(ctx->pool);
     vs_relevant_cache_free(ctx->relevant);
+    vs_lod_cache_free(ctx->lod);
     if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
     free(ctx->shade_lut);
     vs_preint_free(ctx->preint);
@@ -68,6 +70,7 @@ void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_s
     s->shininess = 20.0;
     s->occlusion = 1;
     s->preintegration = -1;
+    s->lod_pixels = 1.0;
     s->occlusion_threshold = 0.995;
     s->tile_counters = 1;
     s->tile_size = 64;

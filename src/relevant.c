@@ -316,10 +316,11 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
     return VS_OK;
 }
 
-vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                          int seam, const vs_relevant_cache **out, int *rebuilt)
+vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_pool *pool,
+                          const struct vs_volume *vol, const vs_classify *c, int seam, const vs_relevant_cache **out,
+                          int *rebuilt)
 {
-    vs_relevant_cache *rc = ctx->relevant;
+    vs_relevant_cache *rc = *slot;
     *rebuilt = 0;
     if (rc && rc->vol == vol && rc->serial == vol->serial && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
         rc->vmax == vol->vmax && rc->alpha_lo == c->alpha_lo && rc->alpha_hi == c->alpha_hi &&
@@ -328,7 +329,7 @@ vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs
         return VS_OK;
     }
     vs_relevant_cache *old = rc;
-    ctx->relevant = NULL;
+    *slot = NULL;
     rc = calloc(1, sizeof *rc);
     if (!rc) {
         vs_relevant_cache_free(old);
@@ -350,7 +351,7 @@ vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs
     rc->alpha_hi = c->alpha_hi;
     rc->seam = seam;
     rc->build_ms = vs_now_ms() - t0;
-    ctx->relevant = rc;
+    *slot = rc;
     *out = rc;
     *rebuilt = 1;
     return VS_OK;

@@ -45,13 +45,15 @@ typedef struct vs_relevant_cache {
     double build_ms;
 } vs_relevant_cache;
 
-/* Returns the cached list if still valid, else rebuilds it.  *rebuilt tells
- * which happened. */
+/* Returns the list cached in *slot if still valid, else rebuilds it there
+ * (the context's slot for full resolution, one a level of detail).
+ * *rebuilt tells which happened. */
 struct vs_pool;
 /* The rebuild runs on `pool` (NULL: on the calling thread); the list is the
  * same for any thread count. */
-vs_status vs_relevant_get(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                          int seam, const vs_relevant_cache **out, int *rebuilt);
+vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_pool *pool,
+                          const struct vs_volume *vol, const vs_classify *c, int seam, const vs_relevant_cache **out,
+                          int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
 /* Does the classification give value 0 (empty space) a non-zero opacity?
  * Then every voxel is relevant and sheets are clipped to the volume. */

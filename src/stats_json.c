@@ -191,6 +191,8 @@ size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap)
         }
         put_str(&o, "  },\n");
     }
+    if (HAS(ms_lod)) kv_dbl(&o, "ms_lod", st->ms_lod);
+    if (HAS(lod_level)) kv_int(&o, "lod_level", st->lod_level);
 #undef HAS
     key(&o, "  ", "version");
     put_json_string(&o, VS_VERSION_STRING);

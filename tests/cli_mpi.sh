@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# vsplat-mpi (sort-last rendering over MPI) against `vsplat render`:
+# vsplat-mpi (sort-last rendering over MPI) against `vsplat render --no-lod`
+# (ranks render their bricks at full resolution):
 # N = 1 bit-identical; N = 2, 3, 4 within the stated seam bound (PSNR >= 60
 # dB and no pixel channel off by more than 0.05, docs/DISTRIBUTED.md; the
 # issue's floor is 40 dB; a ghost layer one pixel too thin gave 56 dB, 0.16)
@@ -60,7 +61,7 @@ same_image() {
 render_all() {
     local desc=$1
     shift
-    run render "$@" --threads 1 -q -o "$T/ref.exr"
+    run render "$@" --no-lod --threads 1 -q -o "$T/ref.exr"
     [[ $rc -eq 0 ]] || { bad "$desc: vsplat render failed: $(cat "$T/err")"; return; }
     for n in 1 2 3 4; do
         mpi "$n" "$@" --threads 1 --no-pin -q -o "$T/n$n.exr"

@@ -43,6 +43,7 @@ static int render(vs_context *ctx, const frame_case *c, vs_image *img)
     s.occlusion = c->occlusion;
     s.width = s.height = c->size;
     s.azimuth = c->az;
+    s.lod_pixels = 0; /* the footprint paths at full resolution, however small */
     s.elevation = c->el;
     const vs_status st = vs_render(ctx, v, &s, img, NULL);
     CHECK(st == VS_OK, "%s %s: %s", c->scene, vs_pipeline_name(c->pipeline), vs_last_error(ctx));

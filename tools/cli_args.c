@@ -80,7 +80,7 @@ enum opt_id {
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
-    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT
+    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD
 };
 
 typedef struct opt_def {
@@ -127,6 +127,8 @@ static const opt_def opt_table[] = {
     {"--normal-lut", 1, O_NORMAL_LUT, 0},
     {"--preintegration", 0, O_PREINT, 0},
     {"--no-preintegration", 0, O_NO_PREINT, 0},
+    {"--lod", 1, O_LOD, 0},
+    {"--no-lod", 0, O_NO_LOD, 0},
     {"--ray-step", 1, O_RAY_STEP, 0},
     {"--trilinear", 0, O_TRILINEAR, 0},
     {"--no-analytic", 0, O_NO_ANALYTIC, 0},
@@ -377,6 +379,8 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_EXACT_N: s->exact_normals = 1; return 0;
     case O_PREINT: s->preintegration = 1; return 0;
     case O_NO_PREINT: s->preintegration = 0; return 0;
+    case O_LOD: return parse_range_double(n, v, 0.0, 1e6, 0, &s->lod_pixels, err, cap);
+    case O_NO_LOD: s->lod_pixels = 0.0; return 0;
     case O_NORMAL_LUT: return parse_range_int(n, v, 8, 65536, &s->normal_lut_size, err, cap);
     case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
     case O_TRILINEAR: s->ray_trilinear = 1; return 0;
@@ -630,6 +634,9 @@ void cli_render_usage(FILE *f)
             "                         the segment to the next sheet, pre-integrated, when the\n"
             "                         classification is translucent; --preintegration always)\n"
             "leaving out work:\n"
+            "  --lod PX               levels of detail: splat a filtered copy of the volume whose\n"
+            "                         voxels lie at most PX pixels apart (default 1)\n"
+            "  --no-lod               full resolution however small the volume is seen\n"
             "  --no-occlusion         no early splat elimination\n"
             "  --occlusion-threshold T  opacity above which a pixel is occluded (default 0.995)\n"
             "  --no-tiles             no tile counters: shade every tile of every sheet\n"

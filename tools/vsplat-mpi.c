@@ -259,6 +259,8 @@ static int run(int rank, int n, int argc, char **argv)
         if (rank == 0) cli_render_usage(stdout);
         return 0;
     }
+    /* bricks render at full resolution (docs/DISTRIBUTED.md), one rank too */
+    o.s.lod_pixels = 0.0;
     const char *unsupported = o.turntable > 0                        ? "--turntable"
                               : o.trace_path                         ? "--trace"
                               : o.s.pipeline == VS_PIPELINE_RAYCAST  ? "--pipeline raycast"
@@ -404,7 +406,7 @@ static int run(int rank, int n, int argc, char **argv)
     }
     s.zoom = o.s.zoom * ext_brick / ext_full;
     s.has_center = 1;
-    s.has_crop = 1;
+    s.has_crop = 1; /* which also means full resolution: no levels of detail */
     for (int c = 0; c < 4; c++) s.background[c] = 0.0f;
     vs_image part = {0, 0, NULL};
     vs_stats stats;

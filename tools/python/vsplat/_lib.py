@@ -58,6 +58,7 @@ class Settings(ctypes.Structure):
         ("view", c_int), ("has_up", c_int), ("up", c_double * 3), ("roll", c_double),
         ("has_crop", c_int), ("crop_lo", c_int * 3), ("crop_hi", c_int * 3),
         ("preintegration", c_int),
+        ("lod_pixels", c_double),
     ]
 
 
@@ -82,6 +83,7 @@ class Stats(ctypes.Structure):
         ("bricks_culled", c_uint64), ("voxels_projected", c_uint64), ("voxels_tested", c_uint64),
         ("footprint_floats", c_uint64), ("pixels_classified", c_uint64), ("pixels_shaded", c_uint64),
         ("bytes_read", StageBytes), ("bytes_written", StageBytes),
+        ("ms_lod", c_double), ("lod_level", c_int),
     ]
 
 

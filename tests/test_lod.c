@@ -1,0 +1,308 @@
+/* Levels of detail (src/lod.c, vs_settings.lod_pixels):
+ *  - the filter conserves: a level's mean is its volume's (even sizes, where
+ *    every voxel has the same total weight), a constant stays constant;
+ *  - the level follows the picture: small images splat a coarser level and
+ *    a surface's voxels 4x fewer a level, large ones the full volume, lod_pixels 0
+ *    always, pre and post-alpha one level finer than post-cd;
+ *  - the coarser volume lands where the full one does: the image centroid
+ *    of an off-centre sphere agrees to 0.1 pixel, orthographic and
+ *    perspective;
+ *  - against the analytic sphere (the ray caster on the true function)
+ *    the coarser frame stays within 5 dB of the full one and above 42 dB;
+ *  - bit-identical for 1 and 2 threads; the levels and their relevant
+ *    voxels are kept across frames (also across a full-resolution frame)
+ *    and rebuilt when the volume changes; bad lod_pixels is refused. */
+#include "context.h"
+#include "lod.h"
+#include "testutil.h"
+
+static vs_image render(vs_context *ctx, const vs_volume *v, const vs_settings *s, vs_stats *st)
+{
+    vs_image img = {0, 0, NULL};
+    vs_status rc = vs_render(ctx, v, s, &img, st);
+    CHECK(rc == VS_OK, "render: %s", vs_last_error(ctx));
+    return img;
+}
+
+static double psnr(vs_context *ctx, const vs_image *a, const vs_image *b)
+{
+    vs_image_diff d;
+    if (vs_image_compare(ctx, a, b, &d) != VS_OK) return -1;
+    return d.psnr;
+}
+
+static void centroid(const vs_image *im, double c[2])
+{
+    double m = 0, x = 0, y = 0;
+    for (int j = 0; j < im->height; j++)
+        for (int i = 0; i < im->width; i++) {
+            const double a = im->rgba[4 * ((size_t)j * im->width + i) + 3];
+            m += a, x += a * i, y += a * j;
+        }
+    c[0] = m > 0 ? x / m : NAN;
+    c[1] = m > 0 ? y / m : NAN;
+}
+
+static void test_filter(vs_context *ctx)
+{
+    const int d[3] = {24, 18, 10};
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, VS_F32, d, NULL, &v) == VS_OK, "create");
+    if (!v) return;
+    float *f = vs_volume_data(v);
+    unsigned r = 12345;
+    double sum = 0;
+    const size_t n = (size_t)d[0] * d[1] * d[2];
+    for (size_t i = 0; i < n; i++) {
+        r = r * 1103515245u + 12345u;
+        f[i] = (float)((r >> 8) % 1000);
+        sum += f[i];
+    }
+    vs_volume_update_range(v);
+    vs_lod_cache *cache = NULL;
+    const struct vs_volume *l1 = NULL, *l2 = NULL;
+    double ms;
+    CHECK(vs_lod_get(ctx, NULL, &cache, v, 1, &l1, &ms) == VS_OK && l1, "level 1: %s", vs_last_error(ctx));
+    CHECK(vs_lod_get(ctx, NULL, &cache, v, 2, &l2, &ms) == VS_OK && l2, "level 2: %s", vs_last_error(ctx));
+    if (l1 && l2) {
+        CHECK(l1->dims[0] == 12 && l1->dims[1] == 9 && l1->dims[2] == 5 && l2->dims[1] == 5 && l2->dims[2] == 3,
+              "dims %dx%dx%d, %dx%dx%d", l1->dims[0], l1->dims[1], l1->dims[2], l2->dims[0], l2->dims[1],
+              l2->dims[2]);
+        CHECK(l1->spacing[0] == 2.0 && l2->spacing[2] == 4.0, "spacing %g %g", l1->spacing[0], l2->spacing[2]);
+        /* level voxel 0 sits between full voxels 0 and 1 */
+        CHECK(l1->affine[0][3] == 0.5 && l2->affine[1][3] == 1.5, "origin %g %g", l1->affine[0][3],
+              l2->affine[1][3]);
+        double s1 = 0;
+        const float *g = l1->data;
+        for (size_t i = 0; i < (size_t)12 * 9 * 5; i++) s1 += g[i];
+        const double m0 = sum / n, m1 = s1 / (12 * 9 * 5);
+        CHECK(fabs(m1 - m0) < 1e-4 * m0, "mean %.6f, level 1 %.6f", m0, m1);
+        printf("  filter: mean %.4f, level 1 %.4f (24x18x10 -> 12x9x5)\n", m0, m1);
+    }
+    vs_lod_cache_free(cache);
+    /* anisotropic: only axes within 1.5x of the finest spacing halve */
+    const double sp[3] = {1, 1, 3};
+    vs_volume *w = NULL;
+    CHECK(vs_volume_create(ctx, VS_U8, d, sp, &w) == VS_OK, "create anisotropic");
+    if (w) {
+        const struct vs_volume *l3 = NULL;
+        cache = NULL;
+        CHECK(vs_lod_get(ctx, NULL, &cache, w, 3, &l3, &ms) == VS_OK, "anisotropic level 3");
+        if (cache && l3) {
+            const struct vs_volume *a1 = cache->level[1], *a2 = cache->level[2];
+            CHECK(a1->dims[0] == 12 && a1->dims[2] == 10 && a1->spacing[2] == 3 && a2->spacing[0] == 4 &&
+                      a2->spacing[2] == 3 && l3->spacing[0] == 8 && l3->spacing[2] == 6 && l3->dims[2] == 5,
+                  "anisotropic levels: %gx%gx%g, %gx%gx%g, %gx%gx%g", a1->spacing[0], a1->spacing[1],
+                  a1->spacing[2], a2->spacing[0], a2->spacing[1], a2->spacing[2], l3->spacing[0], l3->spacing[1],
+                  l3->spacing[2]);
+            /* an unhalved axis keeps its origin */
+            CHECK(a1->affine[2][3] == 0.0 && a1->affine[0][3] == 0.5, "anisotropic origin %g %g", a1->affine[0][3],
+                  a1->affine[2][3]);
+        }
+        vs_lod_cache_free(cache);
+        vs_volume_release(w);
+    }
+    /* a constant stays constant, odd sizes and integer voxels too */
+    const int e[3] = {7, 5, 9};
+    vs_volume *u = NULL;
+    CHECK(vs_volume_create(ctx, VS_U8, e, NULL, &u) == VS_OK, "create u8");
+    if (u) {
+        memset(vs_volume_data(u), 77, 7 * 5 * 9);
+        vs_volume_update_range(u);
+        cache = NULL;
+        CHECK(vs_lod_get(ctx, NULL, &cache, u, 2, &l2, &ms) == VS_OK, "u8 level 2");
+        int bad = 0;
+        for (int i = 0; i < l2->dims[0] * l2->dims[1] * l2->dims[2]; i++) bad += ((const uint8_t *)l2->data)[i] != 77;
+        CHECK(bad == 0, "%d voxels of a constant level changed", bad);
+        vs_lod_cache_free(cache);
+        vs_volume_release(u);
+    }
+    vs_volume_release(v);
+}
+
+static int level_of(vs_context *ctx, const vs_volume *v, vs_settings s, vs_stats *st)
+{
+    vs_image im = render(ctx, v, &s, st);
+    vs_image_free(&im);
+    return st->lod_level;
+}
+
+static void test_choice(vs_context *ctx, const vs_volume *v)
+{
+    vs_settings s;
+    vs_settings_init(&s);
+    s.pipeline = VS_PIPELINE_POST_CD;
+    vs_stats a, b;
+    s.width = s.height = 32; /* 128 voxels across 32 pixels */
+    const int l32 = level_of(ctx, v, s, &a);
+    s.lod_pixels = 0;
+    const int l0 = level_of(ctx, v, s, &b);
+    CHECK(l32 == 2 && l0 == 0, "post-cd 32x32: level %d, with lod_pixels 0 %d", l32, l0);
+    /* a surface's voxels: 4x fewer a level */
+    CHECK(a.voxels_splatted * 12 < b.voxels_splatted, "level 2 splatted %llu, full %llu",
+          (unsigned long long)a.voxels_splatted, (unsigned long long)b.voxels_splatted);
+    CHECK(a.voxels_total == b.voxels_total, "voxels_total is the volume's");
+    printf("  32x32 post-cd: level %d splats %llu, full %llu; frame %.1f vs %.1f ms\n", l32,
+           (unsigned long long)a.voxels_splatted, (unsigned long long)b.voxels_splatted, a.ms_total, b.ms_total);
+    s.lod_pixels = 1;
+    s.pipeline = VS_PIPELINE_PRE;
+    CHECK(level_of(ctx, v, s, &a) == 1, "pre 32x32: level %d (one finer)", a.lod_level);
+    s.pipeline = VS_PIPELINE_POST_ALPHA;
+    CHECK(level_of(ctx, v, s, &a) == 1, "post-alpha 32x32: level %d (one finer)", a.lod_level);
+    s.pipeline = VS_PIPELINE_POST_CD;
+    s.width = s.height = 160;
+    CHECK(level_of(ctx, v, s, &a) == 0, "160x160: level %d", a.lod_level);
+    s.width = s.height = 32;
+    s.lod_pixels = 4;
+    CHECK(level_of(ctx, v, s, &a) == 4, "lod_pixels 4: level %d", a.lod_level);
+    s.lod_pixels = -1;
+    vs_image im = {0, 0, NULL};
+    CHECK(vs_render(ctx, v, &s, &im, NULL) == VS_ERR_INVALID_ARGUMENT && strstr(vs_last_error(ctx), "lod_pixels"),
+          "lod_pixels -1: %s", vs_last_error(ctx));
+}
+
+static void test_registration(vs_context *ctx, const vs_volume *v)
+{
+    static const vs_pipeline pipes[] = {VS_PIPELINE_PRE, VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS,
+                                        VS_PIPELINE_POST_ALPHA};
+    for (int persp = 0; persp < 2; persp++)
+        for (int p = 0; p < 4; p++) {
+            vs_settings s;
+            vs_settings_init(&s);
+            s.pipeline = pipes[p];
+            s.width = s.height = persp ? 28 : 36; /* the nearest corner is seen larger */
+            s.azimuth = 30, s.elevation = 20;
+            /* off-centre: a wrong level origin moves the picture */
+            s.has_center = 1;
+            s.center[0] = 80, s.center[1] = 50, s.center[2] = 70;
+            s.perspective_fov = persp ? 30 : 0;
+            vs_stats a, b;
+            vs_image lod = render(ctx, v, &s, &a);
+            s.lod_pixels = 0;
+            vs_image full = render(ctx, v, &s, &b);
+            double c0[2], c1[2];
+            centroid(&lod, c1);
+            centroid(&full, c0);
+            const double dx = c1[0] - c0[0], dy = c1[1] - c0[1];
+            CHECK(a.lod_level >= 1 && hypot(dx, dy) < 0.1, "pipeline %d persp %d: level %d, centroid moved %.3f,%.3f",
+                  p, persp, a.lod_level, dx, dy);
+            printf("  centroid, pipeline %d%s: level %d, moved %.3f,%.3f px\n", p, persp ? " perspective" : "",
+                   a.lod_level, dx, dy);
+            vs_image_free(&lod);
+            vs_image_free(&full);
+        }
+}
+
+/* A ball in millimetres on a grid with slices 2 mm apart (a CT series'
+ * shape): its levels halve x and y first. */
+static void test_anisotropic(vs_context *ctx)
+{
+    const int d[3] = {128, 128, 64};
+    const double sp[3] = {1, 1, 2};
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, VS_U8, d, sp, &v) == VS_OK, "create");
+    if (!v) return;
+    uint8_t *u = vs_volume_data(v);
+    for (int k = 0; k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++) {
+                const double r = sqrt((i - 70.0) * (i - 70.0) + (j - 55.0) * (j - 55.0) + (2 * k - 60.0) * (2 * k - 60.0));
+                const double t = (40.0 - r) / 4.0 + 0.5;
+                u[((size_t)k * d[1] + j) * d[0] + i] = (uint8_t)lrint(255 * (t < 0 ? 0 : t > 1 ? 1 : t));
+            }
+    vs_volume_update_range(v);
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 40;
+    s.azimuth = 50, s.elevation = 25;
+    s.has_iso = 1, s.iso_lo = 128, s.iso_hi = INFINITY, s.ramp = 20;
+    vs_stats a, b;
+    vs_image lod = render(ctx, v, &s, &a);
+    s.lod_pixels = 0;
+    vs_image full = render(ctx, v, &s, &b);
+    double c0[2], c1[2];
+    centroid(&lod, c1);
+    centroid(&full, c0);
+    const double pf = psnr(ctx, &lod, &full);
+    CHECK(a.lod_level >= 2 && hypot(c1[0] - c0[0], c1[1] - c0[1]) < 0.1 && pf > 30,
+          "anisotropic ball: level %d, centroid moved %.3f,%.3f, %.1f dB", a.lod_level, c1[0] - c0[0],
+          c1[1] - c0[1], pf);
+    printf("  anisotropic ball (1x1x2 mm): level %d, centroid moved %.3f,%.3f px, %.1f dB against full resolution\n",
+           a.lod_level, c1[0] - c0[0], c1[1] - c0[1], pf);
+    vs_image_free(&lod);
+    vs_image_free(&full);
+    vs_volume_release(v);
+}
+
+static void test_accuracy(vs_context *ctx)
+{
+    vs_volume *v = tu_scene(ctx, "sphere:256");
+    if (!v) return;
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 64;
+    s.pipeline = VS_PIPELINE_RAYCAST;
+    vs_image truth = render(ctx, v, &s, NULL);
+    s.pipeline = VS_PIPELINE_POST_CD;
+    vs_stats a, b;
+    vs_image lod = render(ctx, v, &s, &a);
+    s.threads = 1;
+    vs_image one = render(ctx, v, &s, NULL);
+    s.threads = 2;
+    s.lod_pixels = 0;
+    vs_image full = render(ctx, v, &s, &b);
+    const double pl = psnr(ctx, &lod, &truth), pf = psnr(ctx, &full, &truth);
+    CHECK(a.lod_level == 2 && pl >= 42.0 && pl >= pf - 5.0, "sphere 256 at 64x64: level %d %.1f dB, full %.1f dB",
+          a.lod_level, pl, pf);
+    CHECK(tu_max_diff(&lod, &one) == 0.0, "1 and 2 threads differ by %g", tu_max_diff(&lod, &one));
+    printf("  sphere:256 at 64x64 against the analytic ray caster: level %d %.1f dB in %.1f ms, full %.1f dB in "
+           "%.1f ms\n",
+           a.lod_level, pl, a.ms_total, pf, b.ms_total);
+    vs_image_free(&truth);
+    vs_image_free(&lod);
+    vs_image_free(&one);
+    vs_image_free(&full);
+    vs_volume_release(v);
+}
+
+static void test_cache(vs_context *ctx, vs_volume *v)
+{
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 32;
+    s.pipeline = VS_PIPELINE_POST_CD;
+    vs_stats a;
+    level_of(ctx, v, s, &a); /* built earlier by test_choice: kept */
+    CHECK(a.lod_level == 2 && a.ms_lod == 0.0, "level %d: second frame rebuilt the levels (%.3f ms)", a.lod_level,
+          a.ms_lod);
+    /* full resolution in between keeps the level's relevant voxels */
+    s.lod_pixels = 0;
+    level_of(ctx, v, s, &a);
+    s.lod_pixels = 1;
+    level_of(ctx, v, s, &a);
+    CHECK(a.lod_level == 2 && a.ms_relevant == 0.0, "back at level 2 the relevant voxels were rebuilt (%.3f ms)",
+          a.ms_relevant);
+    double lo, hi;
+    vs_volume_range(v, &lo, &hi);
+    CHECK(vs_volume_set_range(v, lo, hi) == VS_OK, "set_range");
+    level_of(ctx, v, s, &a);
+    CHECK(a.ms_lod > 0.0, "a changed volume kept its old levels");
+}
+
+int main(void)
+{
+    vs_context *ctx = NULL;
+    if (vs_context_create(&ctx) != VS_OK) return 1;
+    test_filter(ctx);
+    vs_volume *v = tu_scene(ctx, "sphere:128");
+    if (v) {
+        test_choice(ctx, v);
+        test_cache(ctx, v);
+        test_registration(ctx, v);
+        vs_volume_release(v);
+    }
+    test_anisotropic(ctx);
+    test_accuracy(ctx);
+    vs_context_release(ctx);
+    TEST_DONE();
+}
