@@ -126,6 +126,7 @@ int bench_limits(const bench_opts *o);  /* mode_limits.c: each stage against the
 int bench_peers(const bench_opts *o);
 /* mode_oracle.c: post-cd with and without the voxels that cannot show */
 int bench_oracle(const bench_opts *o);
+int bench_lod(const bench_opts *o);
 /* frame takes the render options of `vsplat render` (argv after "frame") */
 int bench_frame(const bench_opts *o, int argc, char **argv);
 

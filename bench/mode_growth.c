@@ -1,6 +1,8 @@
-/* vsplat-bench growth: how frame time grows with the relevant-voxel count
- * (sphere:N, N = 32..512, fixed image) and with the image size (sphere:128,
- * 128^2..2048^2), with least-squares slopes on log-log axes. */
+/* vsplat-bench growth: how frame time grows with the volume (sphere:N,
+ * N = 32..512, fixed image; at full resolution against the relevant-voxel
+ * count, and with levels of detail against the volume's voxel count) and
+ * with the image size (sphere:128, 128^2..2048^2), with least-squares
+ * slopes on log-log axes. */
 #include "bench.h"
 
 #include <math.h>
@@ -65,7 +67,7 @@ int bench_growth(const bench_opts *o)
         return 2;
     }
 
-    bench_case cases[10];
+    bench_case cases[15];
     int n = 0;
     for (int i = 0; i < nv; i++) {
         vs_settings s;
@@ -74,6 +76,7 @@ int bench_growth(const bench_opts *o)
         s.azimuth = 20;
         s.elevation = 15;
         s.threads = o->threads;
+        s.lod_pixels = 0;
         char name[64];
         snprintf(name, sizeof name, "sphere:%d at %d^2", vn[i], vol_image);
         bench_case_set(&cases[n++], name, vols[i], &s);
@@ -89,9 +92,20 @@ int bench_growth(const bench_opts *o)
         snprintf(name, sizeof name, "sphere:%d at %d^2", img_volume, in[i]);
         bench_case_set(&cases[n++], name, ivol, &s);
     }
+    for (int i = 0; i < nv; i++) {
+        vs_settings s;
+        vs_settings_init(&s);
+        s.width = s.height = vol_image;
+        s.azimuth = 20;
+        s.elevation = 15;
+        s.threads = o->threads;
+        char name[64];
+        snprintf(name, sizeof name, "sphere:%d at %d^2, lod", vn[i], vol_image);
+        bench_case_set(&cases[n++], name, vols[i], &s);
+    }
     failed += bench_run("growth", cases, n, runs);
 
-    double xv[5], yv[5], xi[5], yi[5];
+    double xv[5], yv[5], xi[5], yi[5], xl[5], yl[5];
     printf("\nGrowth: post-cd, view 20,15, threads %d (0 = one per core), median ms over %d interleaved run%s; "
            "machine: %s; load average %s\n",
            o->threads, runs, runs == 1 ? "" : "s", bench_machine(), bench_loadavg());
@@ -105,11 +119,14 @@ int bench_growth(const bench_opts *o)
     for (int i = 0; i < n; i++) {
         const bench_case *c = &cases[i];
         bench_summary m = bench_summarize(c, bench_m_total);
-        int series_vox = i < nv;
+        int series_vox = i < nv, series_lod = i >= nv + ni;
         double px = (double)c->s.width * c->s.height;
         if (series_vox) {
             xv[i] = (double)c->warm.voxels_relevant;
             yv[i] = m.median;
+        } else if (series_lod) {
+            xl[i - nv - ni] = (double)c->warm.voxels_total;
+            yl[i - nv - ni] = m.median;
         } else {
             xi[i - nv] = px;
             yi[i - nv] = m.median;
@@ -118,23 +135,29 @@ int bench_growth(const bench_opts *o)
                (unsigned long long)c->warm.voxels_total, (unsigned long long)c->warm.voxels_relevant,
                (unsigned long long)c->warm.voxels_splatted, m.median, m.min, m.max, c->warm.ms_relevant);
         if (csv)
-            fprintf(csv, "%s,%s,%d,%llu,%llu,%llu,%.0f,%.3f,%.3f,%.3f,%.3f,%d\n", series_vox ? "voxels" : "image",
-                    series_vox ? "sphere" : "sphere", series_vox ? vn[i] : img_volume,
+            fprintf(csv, "%s,%s,%d,%llu,%llu,%llu,%.0f,%.3f,%.3f,%.3f,%.3f,%d\n",
+                    series_vox ? "voxels" : series_lod ? "voxels_lod" : "image", "sphere",
+                    series_vox ? vn[i] : series_lod ? vn[i - nv - ni] : img_volume,
                     (unsigned long long)c->warm.voxels_total, (unsigned long long)c->warm.voxels_relevant,
                     (unsigned long long)c->warm.voxels_splatted, px, m.median, m.min, m.max, c->warm.ms_relevant,
                     runs);
         if (dat) {
-            if (i == nv) fprintf(dat, "\n\n");
-            if (i == 0) fprintf(dat, "# voxels series: relevant median_ms splatted\n");
+            if (i == nv || i == nv + ni) fprintf(dat, "\n\n");
+            if (i == 0) fprintf(dat, "# voxels series, full resolution: relevant median_ms splatted\n");
             if (i == nv) fprintf(dat, "# image series: pixels median_ms\n");
-            fprintf(dat, "%.0f %.3f %llu\n", series_vox ? xv[i] : px, m.median,
+            if (i == nv + ni) fprintf(dat, "# voxels series, levels of detail: voxels median_ms splatted\n");
+            fprintf(dat, "%.0f %.3f %llu\n", series_vox ? xv[i] : series_lod ? xl[i - nv - ni] : px, m.median,
                     (unsigned long long)c->warm.voxels_splatted);
         }
     }
     double r2v, r2i;
-    double sv = loglog_slope(xv, yv, nv, &r2v), si = loglog_slope(xi, yi, ni, &r2i);
+    double r2l;
+    double sv = loglog_slope(xv, yv, nv, &r2v), si = loglog_slope(xi, yi, ni, &r2i),
+           sl = loglog_slope(xl, yl, nv, &r2l);
     printf("log-log slope, frame time vs relevant voxels (sphere:%d..%d at %d^2): %.3f (R^2 %.3f)\n", vn[0],
            vn[nv - 1], vol_image, sv, r2v);
+    printf("log-log slope, frame time vs voxels with levels of detail (same spheres):          %.3f (R^2 %.3f)\n",
+           sl, r2l);
     printf("log-log slope, frame time vs pixels (sphere:%d, %d^2..%d^2):        %.3f (R^2 %.3f)\n", img_volume,
            in[0], in[ni - 1], si, r2i);
     printf("(slope 1: linear; the relevant-voxel list is built once per classification (list_build_ms, in the warm-up\n"
@@ -142,6 +165,7 @@ int bench_growth(const bench_opts *o)
     if (csv) {
         fprintf(csv, "slope,voxels,,,,,,%.4f,,,,\n", sv);
         fprintf(csv, "slope,image,,,,,,%.4f,,,,\n", si);
+        fprintf(csv, "slope,voxels_lod,,,,,,%.4f,,,,\n", sl);
         fclose(csv);
     }
     if (dat) {
@@ -155,14 +179,15 @@ int bench_growth(const bench_opts *o)
                  "set grid\n"
                  "set key top left\n"
                  "set ylabel 'frame ms'\n"
-                 "set xlabel 'relevant voxels (sphere:N, %d^2)'\n"
-                 "set title 'slope %.2f'\n"
-                 "plot 'growth.dat' index 0 using 1:2 with linespoints pt 7 title 'frame time'\n"
+                 "set xlabel 'relevant voxels, or voxels with levels of detail (sphere:N, %d^2)'\n"
+                 "set title 'slope %.2f full resolution, %.2f levels of detail'\n"
+                 "plot 'growth.dat' index 0 using 1:2 with linespoints pt 7 title 'full resolution (relevant)', "
+                 "'growth.dat' index 2 using 1:2 with linespoints pt 5 title 'levels of detail (all voxels)'\n"
                  "set xlabel 'pixels (sphere:%d)'\n"
                  "set title 'slope %.2f'\n"
                  "plot 'growth.dat' index 1 using 1:2 with linespoints pt 7 title 'frame time'\n"
                  "unset multiplot\n",
-                 bench_plot_terminal(1000, 450), vol_image, sv, img_volume, si);
+                 bench_plot_terminal(1000, 450), vol_image, sv, sl, img_volume, si);
         if (bench_plot(o, "growth", script)) failed++;
     }
     bench_cases_free(cases, n);

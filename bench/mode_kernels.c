@@ -302,6 +302,7 @@ int bench_kernels(const bench_opts *o)
     for (vs_isa isa = VS_ISA_SCALAR; isa <= best && nc < 4; isa = (vs_isa)(isa + 1)) {
         vs_settings s;
         vs_settings_init(&s);
+        s.lod_pixels = 0;
         s.width = s.height = o->quick ? 256 : 512;
         s.azimuth = 180;
         s.threads = 1;

@@ -217,6 +217,7 @@ int bench_limits(const bench_opts *o)
     const int size = o->quick ? 256 : 512;
     vs_settings base;
     vs_settings_init(&base);
+    base.lod_pixels = 0; /* the stages' own rates, at full resolution */
     base.width = base.height = size;
     base.azimuth = 180; /* the face */
     base.threads = o->threads;

@@ -35,6 +35,7 @@ int bench_scaling(const bench_opts *o)
             for (int t = 0; t < nt; t++) {
                 vs_settings s;
                 vs_settings_init(&s);
+                s.lod_pixels = 0; /* the same work at every thread count and size */
                 s.pipeline = pipes[p];
                 s.width = s.height = size;
                 if (!strcmp(input, "colin27")) {

@@ -112,6 +112,7 @@ int bench_table1(const bench_opts *o)
             present[c] = 1;
             vs_settings s;
             vs_settings_init(&s);
+            s.lod_pixels = 0; /* the paper's stages at full resolution */
             s.pipeline = cols[c].pipeline;
             s.width = s.height = size;
             s.has_iso = 1;

@@ -1,6 +1,6 @@
 /* vsplat-bench: timings of the vsplat library (bench/README.md).
  *
- *   vsplat-bench table1|error|scaling|growth|kernels|limits|peers|oracle|all [--quick] [--out DIR] [--data DIR]
+ *   vsplat-bench table1|error|scaling|growth|kernels|limits|peers|oracle|lod|all [--quick] [--out DIR] [--data DIR]
  *                [--runs N] [--threads N] [--no-plot]
  *   vsplat-bench frame INPUT [vsplat render options] [--frames K]
  *
@@ -27,7 +27,10 @@ static void usage(FILE *f)
             "            size: frame-time medians, ratios, PSNR against the ray caster (needs VolPack)\n"
             "  oracle    post-cd on every voxel against only the voxels that can show (the hidden ones\n"
             "            made air from a ray march): the ceiling of visibility culling, same views as peers\n"
-            "  all       table1, error, scaling, growth, kernels, limits, peers, oracle\n"
+            "  lod       levels of detail: a generated 2.16 G-voxel ball seen at 256^2 against the same\n"
+            "            ball 4x coarser and against full resolution (peak memory too); real volumes\n"
+            "            at 128^2 and 256^2 with and without, against a 4x supersampled reference\n"
+            "  all       table1, error, scaling, growth, kernels, limits, peers, oracle, lod\n"
             "  frame INPUT [vsplat render options] [--frames K]\n"
             "            K frames turning the azimuth by 360/K, the iso-change time and peak memory:\n"
             "            prints one line median_ms=... min_ms=... max_ms=... iso_change_ms=... peak_mb=...\n"
@@ -120,8 +123,9 @@ int main(int argc, char **argv)
     if (o.quick && !out_given) o.out_dir = "bench/results/quick";
 
     int (*run[])(const bench_opts *) = {bench_table1,  bench_error,  bench_scaling, bench_growth,
-                                        bench_kernels, bench_limits, bench_peers, bench_oracle};
-    const char *names[] = {"table1", "error", "scaling", "growth", "kernels", "limits", "peers", "oracle"};
+                                        bench_kernels, bench_limits, bench_peers, bench_oracle,
+                                        bench_lod};
+    const char *names[] = {"table1", "error", "scaling", "growth", "kernels", "limits", "peers", "oracle", "lod"};
     const int nmodes = (int)(sizeof names / sizeof names[0]);
     int rc = 0, known = 0;
     double t0 = bench_now_ms();
@@ -135,7 +139,7 @@ int main(int argc, char **argv)
         if (r > rc) rc = r;
     }
     if (!known) {
-        fprintf(stderr, "vsplat-bench: %s: unknown mode (table1, error, scaling, growth, kernels, limits, peers, oracle, frame, all)\n", mode);
+        fprintf(stderr, "vsplat-bench: %s: unknown mode (table1, error, scaling, growth, kernels, limits, peers, oracle, lod, frame, all)\n", mode);
         return 1;
     }
     if (!strcmp(mode, "all")) printf("\nall: %.1f s\n", (bench_now_ms() - t0) / 1000.0);
