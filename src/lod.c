@@ -98,13 +98,37 @@ typedef struct down_job {
     const struct vs_volume *in;
     struct vs_volume *out;
     int dec[3];
-    float *scratch; /* per worker: a plane and a row */
+    float *scratch; /* per worker: a plane and two rows */
     size_t per_worker;
 } down_job;
 
 static const float taps[4] = {0.125f, 0.375f, 0.375f, 0.125f};
 
 static inline int clampi(int v, int hi) { return v < 0 ? 0 : v > hi ? hi : v; }
+
+/* rounded to nearest (half away from zero) and saturated to the type */
+static inline float round_clamp(float x, float lo, float hi)
+{
+    x = x < lo ? lo : x > hi ? hi : x;
+    return x >= 0.0f ? x + 0.5f : x - 0.5f; /* truncated by the cast */
+}
+
+static void store_row(struct vs_volume *v, size_t at, const float *x, int n)
+{
+    switch (v->type) {
+    case VS_U8:
+        for (int i = 0; i < n; i++) ((uint8_t *)v->data)[at + i] = (uint8_t)round_clamp(x[i], 0.0f, 255.0f);
+        break;
+    case VS_I16:
+        for (int i = 0; i < n; i++)
+            ((int16_t *)v->data)[at + i] = (int16_t)round_clamp(x[i], -32768.0f, 32767.0f);
+        break;
+    case VS_U16:
+        for (int i = 0; i < n; i++) ((uint16_t *)v->data)[at + i] = (uint16_t)round_clamp(x[i], 0.0f, 65535.0f);
+        break;
+    default: memcpy((float *)v->data + at, x, (size_t)n * sizeof *x);
+    }
+}
 
 static inline float fin(float x) { return isfinite(x) ? x : 0.0f; }
 
@@ -152,27 +176,24 @@ static void down_plane(void *arg, int worker, int k)
         } else {
             r = pv + (size_t)j * d[0];
         }
-        const size_t at = ((size_t)k * o[1] + j) * o[0];
-        for (int i = 0; i < o[0]; i++) {
-            float x;
-            if (J->dec[0]) {
-                const int i0 = clampi(2 * i - 1, d[0] - 1), i1 = 2 * i, i2 = clampi(2 * i + 1, d[0] - 1),
-                          i3 = clampi(2 * i + 2, d[0] - 1);
-                x = taps[0] * r[i0] + taps[1] * r[i1] + taps[2] * r[i2] + taps[3] * r[i3];
-            } else {
-                x = r[i];
+        const float *x = r;
+        if (J->dec[0]) {
+            /* the faces clamped, the interior without a test */
+            float *xo = rv + d[0];
+            for (int i = 0; i < o[0]; i++) {
+                if (i == 1 && o[0] > 2) {
+                    const int last = (d[0] - 3) / 2; /* 2i + 2 <= d0 - 1 */
+                    for (; i <= last; i++)
+                        xo[i] = taps[0] * r[2 * i - 1] + taps[1] * r[2 * i] + taps[2] * r[2 * i + 1] +
+                                taps[3] * r[2 * i + 2];
+                    if (i >= o[0]) break;
+                }
+                xo[i] = taps[0] * r[clampi(2 * i - 1, d[0] - 1)] + taps[1] * r[2 * i] +
+                        taps[2] * r[clampi(2 * i + 1, d[0] - 1)] + taps[3] * r[clampi(2 * i + 2, d[0] - 1)];
             }
-            switch (J->out->type) {
-            case VS_U8: ((uint8_t *)J->out->data)[at + i] = (uint8_t)lrintf(fminf(fmaxf(x, 0.0f), 255.0f)); break;
-            case VS_I16:
-                ((int16_t *)J->out->data)[at + i] = (int16_t)lrintf(fminf(fmaxf(x, -32768.0f), 32767.0f));
-                break;
-            case VS_U16:
-                ((uint16_t *)J->out->data)[at + i] = (uint16_t)lrintf(fminf(fmaxf(x, 0.0f), 65535.0f));
-                break;
-            default: ((float *)J->out->data)[at + i] = x;
-            }
+            x = xo;
         }
+        store_row(J->out, ((size_t)k * o[1] + j) * o[0], x, o[0]);
     }
 }
 
@@ -206,7 +227,7 @@ static vs_status build_level(vs_context *ctx, struct vs_pool *pool, const struct
     v->default_ramp = full->default_ramp;
     J.out = v;
     const int nw = pool ? vs_pool_threads(pool) : 1;
-    J.per_worker = (size_t)in->dims[0] * in->dims[1] + (size_t)in->dims[0];
+    J.per_worker = (size_t)in->dims[0] * in->dims[1] + 2 * (size_t)in->dims[0];
     J.scratch = malloc(J.per_worker * nw * sizeof *J.scratch);
     if (!J.scratch) {
         vs_volume_release(v);

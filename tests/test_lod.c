@@ -1,5 +1,6 @@
 /* Levels of detail (src/lod.c, vs_settings.lod_pixels):
- *  - the filter conserves: a level's mean is its volume's (even sizes, where
+ *  - the filter is its definition (odd and tiny sizes, faces clamped, NaN
+ *    read as 0) and conserves: a level's mean is its volume's (even sizes, where
  *    every voxel has the same total weight), a constant stays constant;
  *  - the level follows the picture: small images splat a coarser level and
  *    a surface's voxels 4x fewer a level, large ones the full volume, lod_pixels 0
@@ -41,6 +42,61 @@ static void centroid(const vs_image *im, double c[2])
         }
     c[0] = m > 0 ? x / m : NAN;
     c[1] = m > 0 ? y / m : NAN;
+}
+
+/* Level 1 of an isotropic f32 volume by the definition: per axis taps
+ * 1 3 3 1 (/8) on voxels 2i-1 .. 2i+2, clamped to the volume. */
+static double direct_level1(const float *f, const int d[3], int i, int j, int k)
+{
+    static const double w[4] = {0.125, 0.375, 0.375, 0.125};
+    double acc = 0;
+    for (int c = 0; c < 4; c++)
+        for (int b = 0; b < 4; b++)
+            for (int a = 0; a < 4; a++) {
+                int x = 2 * i - 1 + a, y = 2 * j - 1 + b, z = 2 * k - 1 + c;
+                x = x < 0 ? 0 : x >= d[0] ? d[0] - 1 : x;
+                y = y < 0 ? 0 : y >= d[1] ? d[1] - 1 : y;
+                z = z < 0 ? 0 : z >= d[2] ? d[2] - 1 : z;
+                acc += w[a] * w[b] * w[c] * f[((size_t)z * d[1] + y) * d[0] + x];
+            }
+    return acc;
+}
+
+static void test_filter_definition(vs_context *ctx)
+{
+    static const int sizes[][3] = {{13, 7, 9}, {2, 3, 4}, {40, 6, 5}};
+    for (int s = 0; s < 3; s++) {
+        const int *d = sizes[s];
+        vs_volume *v = NULL;
+        CHECK(vs_volume_create(ctx, VS_F32, d, NULL, &v) == VS_OK, "create");
+        if (!v) continue;
+        float *f = vs_volume_data(v);
+        unsigned r = 99u + (unsigned)s;
+        for (size_t i = 0; i < (size_t)d[0] * d[1] * d[2]; i++) {
+            r = r * 1103515245u + 12345u;
+            f[i] = (float)((r >> 8) % 1000) / 10.0f;
+        }
+        f[0] = NAN; /* counts as empty space: 0 in the definition below */
+        vs_volume_update_range(v);
+        vs_lod_cache *cache = NULL;
+        const struct vs_volume *l1 = NULL;
+        double ms, worst = 0;
+        if (vs_lod_get(ctx, NULL, &cache, v, 1, &l1, &ms) == VS_OK && l1) {
+            f[0] = 0.0f;
+            for (int k = 0; k < l1->dims[2]; k++)
+                for (int j = 0; j < l1->dims[1]; j++)
+                    for (int i = 0; i < l1->dims[0]; i++) {
+                        const double e = fabs(((const float *)l1->data)[((size_t)k * l1->dims[1] + j) * l1->dims[0] + i] -
+                                              direct_level1(f, d, i, j, k));
+                        if (!(e <= worst)) worst = e;
+                    }
+        } else {
+            CHECK(0, "level 1 of %dx%dx%d: %s", d[0], d[1], d[2], vs_last_error(ctx));
+        }
+        CHECK(worst < 1e-3, "%dx%dx%d: level 1 differs from the filter's definition by %g", d[0], d[1], d[2], worst);
+        vs_lod_cache_free(cache);
+        vs_volume_release(v);
+    }
 }
 
 static void test_filter(vs_context *ctx)
@@ -294,6 +350,7 @@ int main(void)
     vs_context *ctx = NULL;
     if (vs_context_create(&ctx) != VS_OK) return 1;
     test_filter(ctx);
+    test_filter_definition(ctx);
     vs_volume *v = tu_scene(ctx, "sphere:128");
     if (v) {
         test_choice(ctx, v);
