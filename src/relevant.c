@@ -310,7 +310,14 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
     free(pos);
     rc->nbricks = nbk;
     rc->bricks = bricks;
-    rc->scratch = mask; /* kept for the next rebuild */
+    /* kept for the next rebuild (an iso change then pays no page faults),
+     * unless large: a 2 G-voxel volume would hold 4 GB of it for good */
+    if (2 * n <= VS_RELEVANT_KEEP_SCRATCH) {
+        rc->scratch = mask;
+    } else {
+        free(mask);
+        rc->scratch = NULL;
+    }
     rc->count = count;
     rc->voxels = vox;
     return VS_OK;

@@ -14,6 +14,7 @@
  * the 12 of position plus value): a frame reads the value, and the
  * pre-shaded pipelines the grid gradient, from the volume, and only for the
  * voxels that survive culling. */
+#define VS_RELEVANT_KEEP_SCRATCH ((size_t)256 << 20)
 #define VS_BRICK_BITS 3
 #define VS_BRICK (1 << VS_BRICK_BITS)
 typedef uint16_t vs_voxel;
@@ -41,7 +42,8 @@ typedef struct vs_relevant_cache {
     vs_voxel *voxels;
     size_t nbricks;
     vs_brick *bricks;      /* non-empty bricks only                     */
-    uint8_t *scratch;      /* 2 bytes per grid voxel, kept for rebuilds */
+    uint8_t *scratch;      /* 2 bytes per grid voxel, kept for rebuilds up
+                              to VS_RELEVANT_KEEP_SCRATCH bytes */
     double build_ms;
 } vs_relevant_cache;
 
