@@ -20,7 +20,8 @@ try:
     import numpy as np
     import pydicom
     from pydicom.dataset import Dataset, FileMetaDataset
-    from pydicom.uid import ExplicitVRLittleEndian, ImplicitVRLittleEndian, RLELossless, generate_uid
+    from pydicom.uid import (ExplicitVRBigEndian, ExplicitVRLittleEndian, ImplicitVRLittleEndian, RLELossless,
+                             generate_uid)
 except ImportError:
     sys.exit(3)
 
@@ -130,6 +131,20 @@ write_series(os.path.join(OUT, "rescale_i16"),
              [make_slice(k, stored[k], u16, slope=1, intercept=-1024) for k in range(N)])
 write_series(os.path.join(OUT, "rescale_f32"),
              [make_slice(k, stored[k], f32, slope=0.25, intercept=-10.5) for k in range(N)])
+
+# Explicit VR Big Endian (retired, still written by old systems): the
+# length walk of src/io/dicom_check.c reads it in its own byte order
+os.makedirs(os.path.join(OUT, "bigendian"))
+for k in range(N):
+    ds = make_slice(k, vox[k], main[0].SeriesInstanceUID)
+    ds.PixelData = vox[k].astype(">i2").tobytes()
+    ds.file_meta = FileMetaDataset()
+    ds.file_meta.MediaStorageSOPClassUID = ds.SOPClassUID
+    ds.file_meta.MediaStorageSOPInstanceUID = ds.SOPInstanceUID
+    ds.file_meta.TransferSyntaxUID = ExplicitVRBigEndian
+    ds.is_little_endian = False
+    ds.is_implicit_VR = False
+    ds.save_as(os.path.join(OUT, "bigendian", "%d.dcm" % k), write_like_original=False)
 
 # RLE Lossless (pydicom's encoder) and, if gdcmconv is there, JPEG-LS
 # lossless: GDCM decodes both

@@ -4,9 +4,12 @@
  * elements as one stream (file meta, then the data set in its transfer
  * syntax; a sequence or encapsulated pixel data of undefined length is
  * walked into, its items and fragments too) and refuses a defined length
- * that runs past the end of the file.  Big-endian and deflated data sets
- * end the walk, leaving them to GDCM.  Only lengths are checked, so no file
- * GDCM reads correctly is refused. */
+ * that runs past the end of the file.  A big-endian data set is walked in
+ * its byte order: GDCM, failing to read one, retries it little-endian with
+ * VRs guessed, where a misread length allocated 2.9 GB for a 513-byte file
+ * (fuzz_dicom), so a file must be sound in the syntax it declares.
+ * Deflated data sets end the walk, leaving them to GDCM.  Only lengths are
+ * checked, so no file GDCM reads correctly is refused. */
 #include "dicom_check.h"
 
 #include <errno.h>
@@ -48,35 +51,53 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
     uint64_t pos = 0;
     if (fread(b, 1, sizeof b, f) == sizeof b && !memcmp(b + 128, "DICM", 4)) pos = 132;
     int in_meta = 1, explicit_vr = -1; /* -1: the data set's VR rule not known yet */
+    int be = 0;                        /* the data set is big-endian */
+    int encapsulated = 0;              /* inside pixel data of undefined length */
     vs_status st = VS_OK;
     char ts[65] = "";
     while (st == VS_OK && pos + 8 <= size) {
         unsigned char e[12];
         if (fseeko(f, (off_t)pos, SEEK_SET) != 0 || fread(e, 1, 8, f) != 8) break;
-        const unsigned group = e[0] | e[1] << 8u, elem = e[2] | e[3] << 8u;
-        if (in_meta && group != 0x0002) {
+        if (in_meta && (e[0] | e[1] << 8u) != 0x0002) {
             in_meta = 0;
             /* the meta group names the data set's syntax; without one, the
              * first element tells (as vs_dicom_sniff does) */
             if (!strcmp(ts, "1.2.840.10008.1.2")) explicit_vr = 0;
-            else if (!strcmp(ts, "1.2.840.10008.1.2.2") || !strcmp(ts, "1.2.840.10008.1.2.1.99"))
-                break; /* big endian, deflated: left to GDCM */
+            else if (!strcmp(ts, "1.2.840.10008.1.2.2")) explicit_vr = 1, be = 1;
+            else if (!strcmp(ts, "1.2.840.10008.1.2.1.99")) break; /* deflated: left to GDCM */
             else if (ts[0]) explicit_vr = 1;
         }
+#define U16(p) (be ? (unsigned)(p)[0] << 8u | (p)[1] : (unsigned)(p)[0] | (p)[1] << 8u)
+#define U32(p) (be ? (uint64_t)(p)[0] << 24u | (uint64_t)(p)[1] << 16u | (p)[2] << 8u | (p)[3] \
+                   : (p)[0] | (p)[1] << 8u | (uint64_t)(p)[2] << 16u | (uint64_t)(p)[3] << 24u)
+        const unsigned group = U16(e), elem = U16(e + 2);
         /* items and delimiters (group FFFE) have no VR in any syntax */
         const int ex = group != 0xFFFEu && (in_meta || (explicit_vr < 0 ? known_vr(e + 4) : explicit_vr));
         if (!in_meta && explicit_vr < 0) explicit_vr = ex;
         uint64_t len, head = 8;
         if (ex && known_vr(e + 4) && !long_vr(e + 4)) {
-            len = e[6] | e[7] << 8u;
+            len = U16(e + 6);
         } else if (ex && known_vr(e + 4)) {
             if (fread(e + 8, 1, 4, f) != 4) break;
-            len = e[8] | e[9] << 8u | (uint64_t)e[10] << 16u | (uint64_t)e[11] << 24u;
+            len = U32(e + 8);
             head = 12;
         } else { /* implicit VR, or an unknown VR read as GDCM falls back */
-            len = e[4] | e[5] << 8u | (uint64_t)e[6] << 16u | (uint64_t)e[7] << 24u;
+            len = U32(e + 4);
         }
+#undef U16
+#undef U32
+        /* encapsulated pixel data holds items and its delimiter only: GDCM,
+         * meeting anything else, rereads the file with VRs guessed and took
+         * 4 GB for a 1274-byte one (fuzz_dicom) */
+        if (encapsulated && group != 0xFFFEu) {
+            st = vs_set_error(ctx, VS_ERR_FORMAT,
+                              "%s: malformed DICOM: encapsulated pixel data holds element (%04x,%04x), not an item",
+                              path, group, elem);
+            break;
+        }
+        if (group == 0xFFFEu && elem == 0xE0DDu) encapsulated = 0;
         if (len == 0xFFFFFFFFu || (group == 0xFFFEu && elem != 0xE000u)) {
+            if (group == 0x7FE0u && elem == 0x0010u) encapsulated = 1;
             pos += head; /* undefined length: its items follow; delimiters: nothing */
             continue;
         }
