@@ -98,6 +98,24 @@ static void settings_for(const bench_opts *o, vs_settings *s, int size, double i
     s->threads = o->threads ? o->threads : 2;
 }
 
+/* a box filter of an image to 1/f of its size */
+static vs_image shrink(const vs_image *a, int f)
+{
+    vs_image o = {a->width / f, a->height / f, NULL};
+    o.rgba = calloc((size_t)o.width * o.height * 4, sizeof(float));
+    if (!o.rgba) return o;
+    for (int y = 0; y < o.height; y++)
+        for (int x = 0; x < o.width; x++)
+            for (int c = 0; c < 4; c++) {
+                double acc = 0;
+                for (int j = 0; j < f; j++)
+                    for (int i = 0; i < f; i++)
+                        acc += a->rgba[4 * ((size_t)(y * f + j) * a->width + x * f + i) + c];
+                o.rgba[4 * ((size_t)y * o.width + x) + c] = (float)(acc / (f * f));
+            }
+    return o;
+}
+
 static int balls(const bench_opts *o, int runs, FILE *csv)
 {
     const int big[3] = {1400, 1400, 1100}, qbig[3] = {280, 280, 220};
@@ -131,22 +149,33 @@ static int balls(const bench_opts *o, int runs, FILE *csv)
     c[2].keep_image = 1;
     failed += bench_run("lod balls, full resolution", c + 2, 1, runs < 3 ? runs : 3);
     const double rss2 = peak_rss_gb(), now2 = resident_gb(); /* both lists still held */
+    /* the reference: full resolution at 4x the size, box-filtered */
+    vs_image large = {0, 0, NULL}, ref = {0, 0, NULL};
+    {
+        vs_context *rc = NULL;
+        vs_settings rs = s;
+        rs.width = rs.height = 4 * size;
+        if (vs_context_create(&rc) == VS_OK && vs_render(rc, vb, &rs, &large, NULL) == VS_OK) ref = shrink(&large, 4);
+        vs_context_release(rc);
+        vs_image_free(&large);
+    }
 
     printf("\nLevels of detail, balls: post-cd, %d^2, view 30,20, iso 100 ramp 10, %d threads, median ms over %d "
            "interleaved runs; machine: %s; load average %s\n",
            size, s.threads, runs, bench_machine(), bench_loadavg());
-    printf("%-40s %6s %10s %12s %10s %10s %14s\n", "case", "level", "median_ms", "splatted", "lod_ms", "list_ms",
-           "psnr_vs_full");
+    printf("%-40s %6s %10s %12s %10s %10s %14s %14s\n", "case", "level", "median_ms", "splatted", "lod_ms", "list_ms",
+           "psnr_vs_full", "psnr_vs_ref");
     double med[3];
     for (int i = 0; i < 3; i++) {
         const bench_summary m = bench_summarize(&c[i], bench_m_total);
         med[i] = m.median;
         const double p = i == 0 && !c[0].failed && !c[2].failed ? psnr(&c[0].img, &c[2].img) : NAN;
-        printf("%-40s %6d %10.1f %12llu %10.1f %10.1f %14.1f\n", c[i].name, c[i].warm.lod_level, m.median,
-               (unsigned long long)c[i].warm.voxels_splatted, c[i].warm.ms_lod, c[i].warm.ms_relevant, p);
+        const double pr = i != 1 && !c[i].failed && ref.rgba ? psnr(&c[i].img, &ref) : NAN;
+        printf("%-40s %6d %10.1f %12llu %10.1f %10.1f %14.1f %14.1f\n", c[i].name, c[i].warm.lod_level, m.median,
+               (unsigned long long)c[i].warm.voxels_splatted, c[i].warm.ms_lod, c[i].warm.ms_relevant, p, pr);
         if (csv)
-            fprintf(csv, "%s,%d,%d,%.3f,%llu,%.3f,%.3f,%.2f\n", c[i].name, size, c[i].warm.lod_level, m.median,
-                    (unsigned long long)c[i].warm.voxels_splatted, c[i].warm.ms_lod, c[i].warm.ms_relevant, p);
+            fprintf(csv, "%s,%d,%d,%.3f,%llu,%.3f,%.3f,%.2f,%.2f\n", c[i].name, size, c[i].warm.lod_level, m.median,
+                    (unsigned long long)c[i].warm.voxels_splatted, c[i].warm.ms_lod, c[i].warm.ms_relevant, p, pr);
     }
     printf("big ball with levels of detail / coarse ball: %.2fx; full resolution / levels of detail: %.1fx\n",
            med[0] / med[1], med[2] / med[0]);
@@ -157,29 +186,12 @@ static int balls(const bench_opts *o, int runs, FILE *csv)
         fprintf(csv, "# peak resident GB: balls made %.3f, after lod %.3f, after full %.3f (resident then %.3f); "
                      "volume %.3f\n",
                 rss0, rss1, rss2, now2, gb);
+    free(ref.rgba);
     bench_cases_free(c, 3);
     bench_contexts_release();
     vs_volume_release(vb);
     vs_volume_release(vc);
     return failed;
-}
-
-/* a box filter of an image to 1/f of its size */
-static vs_image shrink(const vs_image *a, int f)
-{
-    vs_image o = {a->width / f, a->height / f, NULL};
-    o.rgba = calloc((size_t)o.width * o.height * 4, sizeof(float));
-    if (!o.rgba) return o;
-    for (int y = 0; y < o.height; y++)
-        for (int x = 0; x < o.width; x++)
-            for (int c = 0; c < 4; c++) {
-                double acc = 0;
-                for (int j = 0; j < f; j++)
-                    for (int i = 0; i < f; i++)
-                        acc += a->rgba[4 * ((size_t)(y * f + j) * a->width + x * f + i) + c];
-                o.rgba[4 * ((size_t)y * o.width + x) + c] = (float)(acc / (f * f));
-            }
-    return o;
 }
 
 static int real(const bench_opts *o, int runs, FILE *csv)
@@ -242,7 +254,7 @@ int bench_lod(const bench_opts *o)
     const int runs = bench_runs(o, 5, 2);
     if (bench_results_dir(o)) return 2;
     FILE *csv = bench_result_open(o, "lod_balls.csv");
-    if (csv) fprintf(csv, "case,size,level,median_ms,splatted,lod_build_ms,list_build_ms,psnr_vs_full\n");
+    if (csv) fprintf(csv, "case,size,level,median_ms,splatted,lod_build_ms,list_build_ms,psnr_vs_full,psnr_vs_ref\n");
     int failed = balls(o, runs, csv);
     if (csv) fclose(csv);
     if (!o->quick) {

@@ -261,6 +261,8 @@ typedef struct vs_stats {
     uint64_t pixels_shaded;    /* of those, with opacity: shaded and composited  */
     vs_stage_bytes bytes_read, bytes_written;
 
+    /* with lod_level > 0, voxels_relevant and the counts after it are the
+     * level's; voxels_total is the volume's */
     double ms_lod;             /* building levels of detail (if any were built)  */
     int lod_level;             /* level splatted: 0 full resolution, L: voxels
                                   2^L times the volume's spacing apart        */

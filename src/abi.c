@@ -77,6 +77,9 @@ vs_status vs_settings_import(vs_context *ctx, const vs_settings *s, vs_settings 
     vs_settings_init_sized(full, sizeof *full, sizeof(vs_stats));
     memcpy(full, s, s->struct_size);
     full->struct_size = sizeof *full;
+    /* a program built before levels of detail renders as it did: it has
+     * no field to turn them off */
+    if (s->struct_size < END_S(lod_pixels)) full->lod_pixels = 0.0;
     return VS_OK;
 }
 

@@ -21,13 +21,20 @@ void vs_lod_cache_free(vs_lod_cache *c)
 
 static int half(int d) { return (d + 1) / 2; }
 
-/* Which axes the next level halves: those within 1.5x of the finest
- * spacing, so anisotropic volumes (CT slices, EM sections) become more
- * isotropic level by level instead of losing their coarse axis first. */
-static void next_axes(const double sp[3], int dec[3])
+/* Which axes the next level halves: of the axes that keep at least
+ * VS_LOD_MIN_DIM voxels when halved (a few voxels cannot hold a shape; a
+ * single slice stays one), those within 1.5x of the finest of them, so
+ * anisotropic volumes (CT slices, EM sections) become more isotropic level
+ * by level instead of losing their coarse axis first.  Returns 0 when no
+ * axis can be halved.  Choosing and building both ask this, from the
+ * level's own sizes and spacing, so they agree. */
+static int next_axes(const int d[3], const double sp[3], int dec[3])
 {
-    const double m = fmin(sp[0], fmin(sp[1], sp[2]));
-    for (int a = 0; a < 3; a++) dec[a] = sp[a] < 1.5 * m;
+    double m = INFINITY;
+    for (int a = 0; a < 3; a++)
+        if (half(d[a]) >= VS_LOD_MIN_DIM && sp[a] < m) m = sp[a];
+    for (int a = 0; a < 3; a++) dec[a] = half(d[a]) >= VS_LOD_MIN_DIM && sp[a] < 1.5 * m;
+    return isfinite(m);
 }
 
 int vs_lod_choose(const struct vs_volume *vol, const vs_settings *s, const vs_camera *cam)
@@ -57,24 +64,16 @@ int vs_lod_choose(const struct vs_volume *vol, const vs_settings *s, const vs_ca
     int level = 0, d[3] = {vol->dims[0], vol->dims[1], vol->dims[2]};
     double sp[3] = {vol->spacing[0], vol->spacing[1], vol->spacing[2]};
     while (level < VS_LOD_MAX) {
-        int dec[3], keep = 1;
-        next_axes(sp, dec);
-        double nsp[3], m = INFINITY;
-        for (int a = 0; a < 3; a++) {
-            nsp[a] = dec[a] ? 2.0 * sp[a] : sp[a];
-            if (nsp[a] < m) m = nsp[a];
-            /* a level keeps at least VS_LOD_MIN_DIM voxels on every axis
-             * it halves (or as many as the volume has): a few voxels
-             * cannot hold a shape */
-            const int least = vol->dims[a] < VS_LOD_MIN_DIM ? vol->dims[a] : VS_LOD_MIN_DIM;
-            if (dec[a] && half(d[a]) < least) keep = 0;
-        }
-        /* the next level's voxels, along its finest axis, in pixels */
-        if (!keep || cam->px_per_mm * m * scale > limit) break;
-        for (int a = 0; a < 3; a++) {
-            if (dec[a]) d[a] = half(d[a]);
-            sp[a] = nsp[a];
-        }
+        int dec[3];
+        if (!next_axes(d, sp, dec)) break;
+        /* the halved axes' voxels on the image, in pixels (axes that stay,
+         * too small to halve, keep their spacing) */
+        double m = INFINITY;
+        for (int a = 0; a < 3; a++)
+            if (dec[a] && 2.0 * sp[a] < m) m = 2.0 * sp[a];
+        if (cam->px_per_mm * m * scale > limit) break;
+        for (int a = 0; a < 3; a++)
+            if (dec[a]) d[a] = half(d[a]), sp[a] *= 2.0;
         level++;
     }
     return level;
@@ -82,9 +81,9 @@ int vs_lod_choose(const struct vs_volume *vol, const vs_settings *s, const vs_ca
 
 /* One level from the one before.  Per halved axis the binomial filter
  * [1 3 3 1]/8 centred between voxels 2i and 2i+1 (where level voxel i
- * sits), clamped at the faces; other axes are copied.  z first (whole
- * planes, vectorisable), then y (whole rows), then x, one output plane a
- * task, each worker with its own planes.  Non-finite values count as empty
+ * sits), clamped at the faces; other axes are copied.  z first, then y
+ * (whole rows, vectorisable), then x, one output plane a task, each worker
+ * with six rows of its own (a 16384-voxel row is 64 KB).  Non-finite values count as empty
  * space, as when splatted.
  *
  * Filtering before classification has a known cost: a bright structure
@@ -98,7 +97,7 @@ typedef struct down_job {
     const struct vs_volume *in;
     struct vs_volume *out;
     int dec[3];
-    float *scratch; /* per worker: a plane and two rows */
+    float *scratch; /* per worker: six rows */
     size_t per_worker;
 } down_job;
 
@@ -132,25 +131,41 @@ static void store_row(struct vs_volume *v, size_t at, const float *x, int n)
 
 static inline float fin(float x) { return isfinite(x) ? x : 0.0f; }
 
-/* plane = sum of w[t] * input plane p[t], as float */
+/* row = sum of w[t] * row jj of input plane p[t], as float */
 #define ZSUM(T, CONV)                                                                                              \
     do {                                                                                                           \
         const T *q[4];                                                                                             \
-        for (int t = 0; t < n; t++) q[t] = (const T *)J->in->data + (size_t)p[t] * np;                             \
+        for (int t = 0; t < n; t++) q[t] = (const T *)J->in->data + (size_t)p[t] * np + (size_t)jj * d[0];         \
         if (n == 4)                                                                                                \
-            for (size_t i = 0; i < np; i++)                                                                        \
-                pv[i] = w[0] * CONV(q[0][i]) + w[1] * CONV(q[1][i]) + w[2] * CONV(q[2][i]) + w[3] * CONV(q[3][i]); \
+            for (int i = 0; i < d[0]; i++)                                                                         \
+                row[i] = w[0] * CONV(q[0][i]) + w[1] * CONV(q[1][i]) + w[2] * CONV(q[2][i]) + w[3] * CONV(q[3][i]); \
         else                                                                                                       \
-            for (size_t i = 0; i < np; i++) pv[i] = CONV(q[0][i]);                                                 \
+            for (int i = 0; i < d[0]; i++) row[i] = CONV(q[0][i]);                                                 \
     } while (0)
 #define AS_FLOAT(x) ((float)(x))
+
+/* Input row jj of output plane k's z taps, filtered in z into `row`. */
+static void z_row(const down_job *J, const int p[4], const float w[4], int n, int jj, float *row)
+{
+    const int *d = J->in->dims;
+    const size_t np = (size_t)d[0] * d[1];
+    switch (J->in->type) {
+    case VS_U8: ZSUM(uint8_t, AS_FLOAT); break;
+    case VS_I16: ZSUM(int16_t, AS_FLOAT); break;
+    case VS_U16: ZSUM(uint16_t, AS_FLOAT); break;
+    default: ZSUM(float, fin); break;
+    }
+}
 
 static void down_plane(void *arg, int worker, int k)
 {
     const down_job *J = arg;
     const int *d = J->in->dims, *o = J->out->dims;
-    const size_t np = (size_t)d[0] * d[1];
-    float *pv = J->scratch + (size_t)worker * J->per_worker, *rv = pv + np;
+    /* a ring of four z-filtered input rows (row jj in slot jj & 3: the four
+     * rows one output row reads are consecutive, and the next output row
+     * reuses two), then one y-filtered row and one x-filtered row */
+    float *ring = J->scratch + (size_t)worker * J->per_worker, *rv = ring + 4 * (size_t)d[0], *xo = rv + d[0];
+    int held[4] = {-1, -1, -1, -1};
     int p[4], n = 1;
     float w[4] = {1.0f, 0.0f, 0.0f, 0.0f};
     if (J->dec[2]) {
@@ -159,27 +174,27 @@ static void down_plane(void *arg, int worker, int k)
     } else {
         p[0] = k;
     }
-    switch (J->in->type) {
-    case VS_U8: ZSUM(uint8_t, AS_FLOAT); break;
-    case VS_I16: ZSUM(int16_t, AS_FLOAT); break;
-    case VS_U16: ZSUM(uint16_t, AS_FLOAT); break;
-    default: ZSUM(float, fin); break;
-    }
     for (int j = 0; j < o[1]; j++) {
-        const float *r;
+        const float *r0[4];
+        const int m = J->dec[1] ? 4 : 1;
+        for (int t = 0; t < m; t++) {
+            const int jj = J->dec[1] ? clampi(2 * j - 1 + t, d[1] - 1) : j;
+            float *slot = ring + (size_t)(jj & 3) * d[0];
+            if (held[jj & 3] != jj) {
+                z_row(J, p, w, n, jj, slot);
+                held[jj & 3] = jj;
+            }
+            r0[t] = slot;
+        }
+        const float *r = r0[0];
         if (J->dec[1]) {
-            const float *r0[4];
-            for (int t = 0; t < 4; t++) r0[t] = pv + (size_t)clampi(2 * j - 1 + t, d[1] - 1) * d[0];
             for (int i = 0; i < d[0]; i++)
                 rv[i] = taps[0] * r0[0][i] + taps[1] * r0[1][i] + taps[2] * r0[2][i] + taps[3] * r0[3][i];
             r = rv;
-        } else {
-            r = pv + (size_t)j * d[0];
         }
         const float *x = r;
         if (J->dec[0]) {
             /* the faces clamped, the interior without a test */
-            float *xo = rv + d[0];
             for (int i = 0; i < o[0]; i++) {
                 if (i == 1 && o[0] > 2) {
                     const int last = (d[0] - 3) / 2; /* 2i + 2 <= d0 - 1 */
@@ -197,11 +212,28 @@ static void down_plane(void *arg, int worker, int k)
     }
 }
 
+/* A level's placement from the one before: level voxel i sits at the
+ * previous level's 2i + 1/2 on a halved axis (halved: twice the spacing). */
+static void place_level(struct vs_volume *v, const struct vs_volume *in)
+{
+    for (int r = 0; r < 3; r++) {
+        v->affine[r][3] = in->affine[r][3];
+        for (int a = 0; a < 3; a++) {
+            const int dec = v->spacing[a] != in->spacing[a];
+            v->affine[r][a] = dec ? 2.0 * in->affine[r][a] : in->affine[r][a];
+            if (dec) v->affine[r][3] += 0.5 * in->affine[r][a];
+        }
+    }
+    v->has_orientation = in->has_orientation;
+}
+
 static vs_status build_level(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *in,
                              const struct vs_volume *full, struct vs_volume **out)
 {
     down_job J = {.in = in};
-    next_axes(in->spacing, J.dec);
+    if (!next_axes(in->dims, in->spacing, J.dec))
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "levels of detail: no axis of %dx%dx%d can be halved",
+                            in->dims[0], in->dims[1], in->dims[2]);
     int dims[3];
     double sp[3];
     for (int a = 0; a < 3; a++) {
@@ -211,15 +243,7 @@ static vs_status build_level(vs_context *ctx, struct vs_pool *pool, const struct
     struct vs_volume *v = NULL;
     vs_status st = vs_volume_alloc(ctx, in->type, dims, sp, &v);
     if (st != VS_OK) return st;
-    /* level voxel i sits at the previous level's 2i + 1/2 on a halved axis */
-    for (int r = 0; r < 3; r++) {
-        v->affine[r][3] = in->affine[r][3];
-        for (int a = 0; a < 3; a++) {
-            v->affine[r][a] = J.dec[a] ? 2.0 * in->affine[r][a] : in->affine[r][a];
-            if (J.dec[a]) v->affine[r][3] += 0.5 * in->affine[r][a];
-        }
-    }
-    v->has_orientation = in->has_orientation;
+    place_level(v, in);
     /* the full volume's range and defaults: the classification is the same */
     v->vmin = full->vmin;
     v->vmax = full->vmax;
@@ -227,7 +251,7 @@ static vs_status build_level(vs_context *ctx, struct vs_pool *pool, const struct
     v->default_ramp = full->default_ramp;
     J.out = v;
     const int nw = pool ? vs_pool_threads(pool) : 1;
-    J.per_worker = (size_t)in->dims[0] * in->dims[1] + 2 * (size_t)in->dims[0];
+    J.per_worker = 6 * (size_t)in->dims[0];
     J.scratch = malloc(J.per_worker * nw * sizeof *J.scratch);
     if (!J.scratch) {
         vs_volume_release(v);
@@ -246,8 +270,10 @@ vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache
                      int level, const struct vs_volume **out, double *ms)
 {
     *ms = 0.0;
+    *out = NULL;
     vs_lod_cache *c = *cache;
-    if (c && (c->vol != vol || c->serial != vol->serial)) {
+    /* the spacing decides which axes halve: a new one, new levels */
+    if (c && (c->vol != vol || c->serial != vol->serial || memcmp(c->spacing, vol->spacing, sizeof c->spacing))) {
         vs_lod_cache_free(c);
         c = *cache = NULL;
     }
@@ -256,6 +282,14 @@ vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
         c->vol = vol;
         c->serial = vol->serial;
+        memcpy(c->spacing, vol->spacing, sizeof c->spacing);
+        memcpy(c->affine, vol->affine, sizeof c->affine);
+        c->has_orientation = vol->has_orientation;
+    } else if (memcmp(c->affine, vol->affine, sizeof c->affine) || c->has_orientation != vol->has_orientation) {
+        /* vs_volume_set_transform since: the same voxels, placed anew */
+        for (int l = 1; l <= VS_LOD_MAX && c->level[l]; l++) place_level(c->level[l], l == 1 ? vol : c->level[l - 1]);
+        memcpy(c->affine, vol->affine, sizeof c->affine);
+        c->has_orientation = vol->has_orientation;
     }
     for (int l = 1; l <= level; l++) {
         if (c->level[l]) continue;

@@ -18,6 +18,8 @@
 typedef struct vs_lod_cache {
     const struct vs_volume *vol; /* key: the full-resolution volume */
     uint64_t serial;
+    double spacing[3], affine[3][4]; /* its geometry when the levels were built */
+    int has_orientation;
     struct vs_volume *level[VS_LOD_MAX + 1]; /* [0] unused: the volume itself */
     /* each level's relevant voxels (full resolution's are the context's):
      * a view that moves between levels does not rebuild them */

@@ -354,9 +354,17 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         if ((rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, ctx->shade_lut)) != VS_OK) goto fail;
         F.lut = *ctx->shade_lut;
     }
+    /* opacity is per unit of the full volume's finest spacing; a level's
+     * view unit is its own finest spacing, so a slab is that much longer */
+    double unit_full = INFINITY, unit_vol = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (full->spacing[a] < unit_full) unit_full = full->spacing[a];
+        if (vol->spacing[a] < unit_vol) unit_vol = vol->spacing[a];
+    }
+    const double slab_len = s->slab * (unit_vol / unit_full);
     for (int i = 0; i < VS_TF_TABLE; i++)
-        F.alpha_corr[i] = (float)vs_opacity_correct(F.cls->alpha[i], s->slab);
-    for (int i = 0; i <= 1024; i++) F.opacity_corr[i] = (float)vs_opacity_correct(i / 1024.0, s->slab);
+        F.alpha_corr[i] = (float)vs_opacity_correct(F.cls->alpha[i], slab_len);
+    for (int i = 0; i <= 1024; i++) F.opacity_corr[i] = (float)vs_opacity_correct(i / 1024.0, slab_len);
 
     /* relevant voxels: pre-shaded splatting needs only the in-range voxels;
      * the post-classified pipelines need the seam layer too (paper §4.3) */
@@ -369,7 +377,10 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
         F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : zero_vis ? -0.5 : -INFINITY;
-        F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : zero_vis ? vol->dims[a] - 0.5 : INFINITY;
+        /* the full volume's face, in the splatted level's index (the same
+         * for the volume itself) */
+        const double face = full->dims[a] * (full->spacing[a] / vol->spacing[a]) - 0.5;
+        F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : zero_vis ? face : INFINITY;
         F.clip_hi_open[a] = cut_hi;
     }
     int rebuilt = 0;
@@ -385,7 +396,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
                 goto fail;
             }
-            if (!vs_preint_update(ctx->preint, F.cls, s->slab, ctx->pool)) {
+            if (!vs_preint_update(ctx->preint, F.cls, slab_len, ctx->pool)) {
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
                 goto fail;
             }
@@ -572,7 +583,14 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         level = vs_lod_choose(vol, s, &cam);
         if (level > 0) {
             if ((rc = vs_context_pool(ctx, s)) != VS_OK) return rc;
-            if ((rc = vs_lod_get(ctx, ctx->pool, &ctx->lod, vol, level, &lv, &ms_lod)) != VS_OK) return rc;
+            if (vs_lod_get(ctx, ctx->pool, &ctx->lod, vol, level, &lv, &ms_lod) != VS_OK) {
+                /* out of memory, or a level the volume's limits refuse:
+                 * the frame at full resolution rather than none */
+                level = 0;
+                lv = vol;
+            }
+        }
+        if (level > 0) {
             vs_lod_settings(vol, lv, s, &ls);
             /* an iso-surface's ramp spans fewer voxels of a coarser level:
              * one sample a sheet draws its contours as rings, which the

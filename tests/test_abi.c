@@ -143,6 +143,31 @@ static void test_init_writes_only_the_callers_bytes(void)
     free(p);
 }
 
+/* A program built before levels of detail gets none, however small it
+ * renders; one built with them gets them by default. */
+static void test_lod_default(vs_context *ctx)
+{
+    vs_volume *v = tu_scene(ctx, "sphere:128");
+    if (!v) return;
+    const size_t cut = ROUND8(END(vs_settings, preintegration));
+    void *base;
+    vs_settings *old = guarded(cut, &base);
+    vs_settings_init_sized(old, cut, sizeof(vs_stats));
+    old->width = old->height = 32;
+    vs_settings now;
+    vs_settings_init(&now);
+    now.width = now.height = 32;
+    vs_image a = {0, 0, NULL}, b = {0, 0, NULL};
+    vs_stats sa, sb;
+    CHECK(vs_render(ctx, v, old, &a, &sa) == VS_OK && vs_render(ctx, v, &now, &b, &sb) == VS_OK, "render: %s",
+          vs_last_error(ctx));
+    CHECK(sa.lod_level == 0 && sb.lod_level > 0, "levels: older layout %d, current %d", sa.lod_level, sb.lod_level);
+    vs_image_free(&a);
+    vs_image_free(&b);
+    unguard(base);
+    vs_volume_release(v);
+}
+
 /* Render with settings cut after various fields and stats cut likewise:
  * the same image and counts as the full layout with the missing fields at
  * their defaults, no byte read or written past either struct. */
@@ -180,6 +205,8 @@ static void test_older_layouts_render(vs_context *ctx, const vs_volume *vol)
                n - offsetof(vs_settings, pipeline));
         const int has_progress = n >= END(vs_settings, progress_user);
         if (has_progress) ref.progress_user = &calls_ref;
+        /* older programs render at full resolution (docs/ABI.md) */
+        if (n < END(vs_settings, lod_pixels)) ref.lod_pixels = 0.0;
 
         unsigned char *st = canaried(m);
         vs_image a = {0, 0, NULL}, b = {0, 0, NULL};
@@ -337,6 +364,7 @@ int main(void)
     test_older_layouts_render(ctx, vol);
     test_unknown_sizes_refused(ctx, vol);
     test_load_options(ctx);
+    test_lod_default(ctx);
     vs_volume_release(vol);
     vs_context_release(ctx);
     TEST_DONE();

@@ -1,6 +1,6 @@
 /* Levels of detail (src/lod.c, vs_settings.lod_pixels):
- *  - the filter is its definition (odd and tiny sizes, faces clamped, NaN
- *    read as 0) and conserves: a level's mean is its volume's (even sizes, where
+ *  - the filter is its definition (odd sizes, faces clamped, NaN read as
+ *    0), halves only axes that keep 8 voxels, and conserves: a level's mean is its volume's (even sizes, where
  *    every voxel has the same total weight), a constant stays constant;
  *  - the level follows the picture: small images splat a coarser level and
  *    a surface's voxels 4x fewer a level, large ones the full volume, lod_pixels 0
@@ -64,7 +64,7 @@ static double direct_level1(const float *f, const int d[3], int i, int j, int k)
 
 static void test_filter_definition(vs_context *ctx)
 {
-    static const int sizes[][3] = {{13, 7, 9}, {2, 3, 4}, {40, 6, 5}};
+    static const int sizes[][3] = {{17, 15, 19}, {16, 16, 16}, {41, 15, 15}};
     for (int s = 0; s < 3; s++) {
         const int *d = sizes[s];
         vs_volume *v = NULL;
@@ -101,7 +101,7 @@ static void test_filter_definition(vs_context *ctx)
 
 static void test_filter(vs_context *ctx)
 {
-    const int d[3] = {24, 18, 10};
+    const int d[3] = {32, 18, 16};
     vs_volume *v = NULL;
     CHECK(vs_volume_create(ctx, VS_F32, d, NULL, &v) == VS_OK, "create");
     if (!v) return;
@@ -116,24 +116,28 @@ static void test_filter(vs_context *ctx)
     }
     vs_volume_update_range(v);
     vs_lod_cache *cache = NULL;
-    const struct vs_volume *l1 = NULL, *l2 = NULL;
+    const struct vs_volume *l1 = NULL, *l2 = NULL, *l3 = NULL;
     double ms;
     CHECK(vs_lod_get(ctx, NULL, &cache, v, 1, &l1, &ms) == VS_OK && l1, "level 1: %s", vs_last_error(ctx));
     CHECK(vs_lod_get(ctx, NULL, &cache, v, 2, &l2, &ms) == VS_OK && l2, "level 2: %s", vs_last_error(ctx));
+    /* then only x can halve (9 and 8 voxels would become 5 and 4), then none */
+    CHECK(vs_lod_get(ctx, NULL, &cache, v, 3, &l3, &ms) != VS_OK && !l3, "level 3 of 8x9x8 was built");
     if (l1 && l2) {
-        CHECK(l1->dims[0] == 12 && l1->dims[1] == 9 && l1->dims[2] == 5 && l2->dims[1] == 5 && l2->dims[2] == 3,
+        CHECK(l1->dims[0] == 16 && l1->dims[1] == 9 && l1->dims[2] == 8 && l2->dims[0] == 8 && l2->dims[1] == 9 &&
+                  l2->dims[2] == 8,
               "dims %dx%dx%d, %dx%dx%d", l1->dims[0], l1->dims[1], l1->dims[2], l2->dims[0], l2->dims[1],
               l2->dims[2]);
-        CHECK(l1->spacing[0] == 2.0 && l2->spacing[2] == 4.0, "spacing %g %g", l1->spacing[0], l2->spacing[2]);
-        /* level voxel 0 sits between full voxels 0 and 1 */
-        CHECK(l1->affine[0][3] == 0.5 && l2->affine[1][3] == 1.5, "origin %g %g", l1->affine[0][3],
-              l2->affine[1][3]);
+        CHECK(l1->spacing[0] == 2.0 && l2->spacing[0] == 4.0 && l2->spacing[2] == 2.0, "spacing %g %g %g",
+              l1->spacing[0], l2->spacing[0], l2->spacing[2]);
+        /* level voxel 0 sits between voxels 0 and 1 of the level before */
+        CHECK(l1->affine[0][3] == 0.5 && l2->affine[0][3] == 1.5 && l2->affine[1][3] == 0.5, "origin %g %g %g",
+              l1->affine[0][3], l2->affine[0][3], l2->affine[1][3]);
         double s1 = 0;
         const float *g = l1->data;
-        for (size_t i = 0; i < (size_t)12 * 9 * 5; i++) s1 += g[i];
-        const double m0 = sum / n, m1 = s1 / (12 * 9 * 5);
+        for (size_t i = 0; i < (size_t)16 * 9 * 8; i++) s1 += g[i];
+        const double m0 = sum / n, m1 = s1 / (16 * 9 * 8);
         CHECK(fabs(m1 - m0) < 1e-4 * m0, "mean %.6f, level 1 %.6f", m0, m1);
-        printf("  filter: mean %.4f, level 1 %.4f (24x18x10 -> 12x9x5)\n", m0, m1);
+        printf("  filter: mean %.4f, level 1 %.4f (32x18x16 -> 16x9x8 -> 8x9x8)\n", m0, m1);
     }
     vs_lod_cache_free(cache);
     /* anisotropic: only axes within 1.5x of the finest spacing halve */
@@ -141,16 +145,18 @@ static void test_filter(vs_context *ctx)
     vs_volume *w = NULL;
     CHECK(vs_volume_create(ctx, VS_U8, d, sp, &w) == VS_OK, "create anisotropic");
     if (w) {
-        const struct vs_volume *l3 = NULL;
+        const struct vs_volume *a3 = NULL;
         cache = NULL;
-        CHECK(vs_lod_get(ctx, NULL, &cache, w, 3, &l3, &ms) == VS_OK, "anisotropic level 3");
-        if (cache && l3) {
+        CHECK(vs_lod_get(ctx, NULL, &cache, w, 3, &a3, &ms) == VS_OK, "anisotropic level 3");
+        if (cache && a3) {
             const struct vs_volume *a1 = cache->level[1], *a2 = cache->level[2];
-            CHECK(a1->dims[0] == 12 && a1->dims[2] == 10 && a1->spacing[2] == 3 && a2->spacing[0] == 4 &&
-                      a2->spacing[2] == 3 && l3->spacing[0] == 8 && l3->spacing[2] == 6 && l3->dims[2] == 5,
+            /* 32x18x16 (1,1,3) -> 16x9x16 (2,2,3) -> 8x9x16 (4,2,3) -> 8x9x8 (4,2,6) */
+            CHECK(a1->dims[0] == 16 && a1->dims[2] == 16 && a1->spacing[2] == 3 && a2->dims[0] == 8 &&
+                      a2->spacing[0] == 4 && a2->spacing[2] == 3 && a3->spacing[0] == 4 && a3->spacing[2] == 6 &&
+                      a3->dims[2] == 8,
                   "anisotropic levels: %gx%gx%g, %gx%gx%g, %gx%gx%g", a1->spacing[0], a1->spacing[1],
-                  a1->spacing[2], a2->spacing[0], a2->spacing[1], a2->spacing[2], l3->spacing[0], l3->spacing[1],
-                  l3->spacing[2]);
+                  a1->spacing[2], a2->spacing[0], a2->spacing[1], a2->spacing[2], a3->spacing[0], a3->spacing[1],
+                  a3->spacing[2]);
             /* an unhalved axis keeps its origin */
             CHECK(a1->affine[2][3] == 0.0 && a1->affine[0][3] == 0.5, "anisotropic origin %g %g", a1->affine[0][3],
                   a1->affine[2][3]);
@@ -158,18 +164,25 @@ static void test_filter(vs_context *ctx)
         vs_lod_cache_free(cache);
         vs_volume_release(w);
     }
-    /* a constant stays constant, odd sizes and integer voxels too */
-    const int e[3] = {7, 5, 9};
+    /* a constant stays constant, odd sizes and integer voxels too; a
+     * single slice is never halved */
+    const int e[3] = {17, 31, 1};
     vs_volume *u = NULL;
     CHECK(vs_volume_create(ctx, VS_U8, e, NULL, &u) == VS_OK, "create u8");
     if (u) {
-        memset(vs_volume_data(u), 77, 7 * 5 * 9);
+        memset(vs_volume_data(u), 77, 17 * 31);
         vs_volume_update_range(u);
         cache = NULL;
-        CHECK(vs_lod_get(ctx, NULL, &cache, u, 2, &l2, &ms) == VS_OK, "u8 level 2");
-        int bad = 0;
-        for (int i = 0; i < l2->dims[0] * l2->dims[1] * l2->dims[2]; i++) bad += ((const uint8_t *)l2->data)[i] != 77;
-        CHECK(bad == 0, "%d voxels of a constant level changed", bad);
+        const struct vs_volume *c1 = NULL;
+        if (vs_lod_get(ctx, NULL, &cache, u, 1, &c1, &ms) == VS_OK && c1) {
+            int bad = 0;
+            for (int i = 0; i < c1->dims[0] * c1->dims[1] * c1->dims[2]; i++)
+                bad += ((const uint8_t *)c1->data)[i] != 77;
+            CHECK(bad == 0 && c1->dims[0] == 9 && c1->dims[1] == 16 && c1->dims[2] == 1 && c1->spacing[2] == 1.0,
+                  "constant 17x31x1: %d voxels changed, level %dx%dx%d", bad, c1->dims[0], c1->dims[1], c1->dims[2]);
+        } else {
+            CHECK(0, "u8 level 1: %s", vs_last_error(ctx));
+        }
         vs_lod_cache_free(cache);
         vs_volume_release(u);
     }
@@ -290,6 +303,137 @@ static void test_anisotropic(vs_context *ctx)
     vs_volume_release(v);
 }
 
+static double alpha_sum(const vs_image *im)
+{
+    double m = 0;
+    for (size_t p = 0; p < (size_t)im->width * im->height; p++) m += im->rgba[4 * p + 3];
+    return m;
+}
+
+/* Opacity is per unit of the full volume: a level's longer slabs must not
+ * thin a translucent ball (centre alpha 0.64 at full resolution, 0.24 at
+ * level 2 when slabs counted in level units). */
+static void test_translucent(vs_context *ctx, const vs_volume *v)
+{
+    static const vs_pipeline pipes[] = {VS_PIPELINE_PRE, VS_PIPELINE_POST_CD, VS_PIPELINE_POST_ALPHA};
+    for (int p = 0; p < 3; p++) {
+        vs_settings s;
+        vs_settings_init(&s);
+        s.pipeline = pipes[p];
+        s.width = s.height = 33;
+        s.iso_opacity = 0.01f;
+        vs_stats a;
+        vs_image lod = render(ctx, v, &s, &a);
+        s.lod_pixels = 0;
+        vs_image full = render(ctx, v, &s, NULL);
+        const size_t c = 4 * ((size_t)16 * 33 + 16) + 3;
+        CHECK(a.lod_level >= 1 && fabs(lod.rgba[c] - full.rgba[c]) < 0.03,
+              "translucent pipeline %d: level %d centre alpha %.3f, full %.3f", p, a.lod_level, lod.rgba[c],
+              full.rgba[c]);
+        printf("  translucent ball, pipeline %d: level %d centre alpha %.3f, full resolution %.3f\n", p,
+               a.lod_level, lod.rgba[c], full.rgba[c]);
+        vs_image_free(&lod);
+        vs_image_free(&full);
+    }
+}
+
+/* A transform set after the levels were built moves them with the volume:
+ * the frame equals a fresh context's. */
+static void test_transform_change(void)
+{
+    vs_context *a = NULL, *b = NULL;
+    if (vs_context_create(&a) != VS_OK || vs_context_create(&b) != VS_OK) return;
+    vs_volume *v = tu_scene(a, "sphere:128");
+    if (v) {
+        vs_settings s;
+        vs_settings_init(&s);
+        s.width = s.height = 32;
+        s.view = VS_VIEW_ANGLES;
+        s.azimuth = 30, s.elevation = 20;
+        s.has_center = 1;
+        s.center[0] = 80, s.center[1] = 50, s.center[2] = 70;
+        vs_image im = render(a, v, &s, NULL);
+        vs_image_free(&im);
+        /* x flipped and the axes moved: a patient frame */
+        const double m[12] = {-1, 0, 0, 127, 0, 0, 1, 10, 0, 1, 0, -5};
+        CHECK(vs_volume_set_transform(a, v, m) == VS_OK, "set_transform: %s", vs_last_error(a));
+        vs_stats sa;
+        vs_image moved = render(a, v, &s, &sa), fresh = render(b, v, &s, NULL);
+        CHECK(sa.lod_level >= 1 && tu_max_diff(&moved, &fresh) == 0.0,
+              "after a new transform, level %d: the kept levels' frame differs from a fresh one by %g", sa.lod_level,
+              tu_max_diff(&moved, &fresh));
+        vs_image_free(&moved);
+        vs_image_free(&fresh);
+        vs_volume_release(v);
+    }
+    vs_context_release(a);
+    vs_context_release(b);
+}
+
+/* A single slice is never halved (its plane would move against the
+ * sheets), and with empty space visible the clip box stays at the full
+ * volume's faces on odd sizes. */
+static void test_thin_and_clip(vs_context *ctx)
+{
+    const int d[3] = {161, 161, 1};
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, VS_U8, d, NULL, &v) == VS_OK, "create");
+    if (v) {
+        uint8_t *u = vs_volume_data(v);
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++) u[j * d[0] + i] = hypot(i - 80.0, j - 80.0) < 60 ? 200 : 0;
+        vs_volume_update_range(v);
+        vs_settings s;
+        vs_settings_init(&s);
+        s.width = s.height = 40;
+        s.has_iso = 1, s.iso_lo = 100, s.iso_hi = INFINITY, s.ramp = 20;
+        s.iso_opacity = 0.5f;
+        s.elevation = 80; /* nearly face-on */
+        vs_stats a;
+        vs_image lod = render(ctx, v, &s, &a);
+        s.lod_pixels = 0;
+        vs_image full = render(ctx, v, &s, NULL);
+        const double ml = alpha_sum(&lod), mf = alpha_sum(&full);
+        /* filtering the disc's edge moves some 8 %; a halved slice once
+         * nearly doubled it */
+        CHECK(a.lod_level >= 1 && fabs(ml - mf) < 0.15 * mf, "disc 161x161x1: level %d alpha %.1f, full %.1f",
+              a.lod_level, ml, mf);
+        printf("  disc 161x161x1 nearly face-on: level %d alpha sum %.1f, full resolution %.1f\n", a.lod_level, ml,
+               mf);
+        vs_image_free(&lod);
+        vs_image_free(&full);
+        vs_volume_release(v);
+    }
+    /* empty space visible: the whole 129^3 box is drawn; its image extent
+     * must not grow with the level */
+    const int e[3] = {129, 129, 129};
+    CHECK(vs_volume_create(ctx, VS_U8, e, NULL, &v) == VS_OK, "create");
+    if (!v) return;
+    memset(vs_volume_data(v), 10, (size_t)129 * 129 * 129);
+    vs_volume_update_range(v);
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 40;
+    s.azimuth = 0, s.elevation = 0;
+    s.has_iso = 1, s.iso_lo = -50, s.iso_hi = INFINITY, s.ramp = 20;
+    s.iso_opacity = 0.02f;
+    vs_stats a;
+    vs_image lod = render(ctx, v, &s, &a);
+    s.lod_pixels = 0;
+    vs_image full = render(ctx, v, &s, NULL);
+    int wl = 0, wf = 0;
+    for (int x = 0; x < 40; x++) {
+        wl += lod.rgba[4 * (20 * 40 + x) + 3] > 0.01f;
+        wf += full.rgba[4 * (20 * 40 + x) + 3] > 0.01f;
+    }
+    CHECK(a.lod_level >= 1 && abs(wl - wf) <= 1, "box 129^3 with empty space visible: level %d %d px wide, full %d",
+          a.lod_level, wl, wf);
+    printf("  129^3 box, empty space visible: level %d %d px wide, full resolution %d\n", a.lod_level, wl, wf);
+    vs_image_free(&lod);
+    vs_image_free(&full);
+    vs_volume_release(v);
+}
+
 static void test_accuracy(vs_context *ctx)
 {
     vs_volume *v = tu_scene(ctx, "sphere:256");
@@ -301,9 +445,14 @@ static void test_accuracy(vs_context *ctx)
     vs_image truth = render(ctx, v, &s, NULL);
     s.pipeline = VS_PIPELINE_POST_CD;
     vs_stats a, b;
+    s.threads = 2;
     vs_image lod = render(ctx, v, &s, &a);
+    /* one thread in a context of its own: the levels built on one thread */
+    vs_context *c1 = NULL;
+    vs_image one = {0, 0, NULL};
     s.threads = 1;
-    vs_image one = render(ctx, v, &s, NULL);
+    if (vs_context_create(&c1) == VS_OK) one = render(c1, v, &s, NULL);
+    vs_context_release(c1);
     s.threads = 2;
     s.lod_pixels = 0;
     vs_image full = render(ctx, v, &s, &b);
@@ -356,9 +505,12 @@ int main(void)
         test_choice(ctx, v);
         test_cache(ctx, v);
         test_registration(ctx, v);
+        test_translucent(ctx, v);
         vs_volume_release(v);
     }
     test_anisotropic(ctx);
+    test_transform_change();
+    test_thin_and_clip(ctx);
     test_accuracy(ctx);
     vs_context_release(ctx);
     TEST_DONE();

@@ -245,9 +245,11 @@ static void print_stats_table(const vs_stats *st)
     double sum = t->setup + t->rasterize + t->gradient + t->shade + t->composite;
     printf("pipeline %s, isa %s, %d thread%s, %dx%d\n", st->pipeline ? st->pipeline : "?",
            st->isa ? st->isa : "?", st->threads, st->threads == 1 ? "" : "s", st->width, st->height);
-    printf("voxels: %llu total, %llu relevant, %llu splatted, %llu culled\n",
-           (unsigned long long)st->voxels_total, (unsigned long long)st->voxels_relevant,
-           (unsigned long long)st->voxels_splatted, (unsigned long long)st->voxels_culled);
+    printf("voxels: %llu total, %llu relevant, %llu splatted, %llu culled", (unsigned long long)st->voxels_total,
+           (unsigned long long)st->voxels_relevant, (unsigned long long)st->voxels_splatted,
+           (unsigned long long)st->voxels_culled);
+    if (st->lod_level > 0) printf(" (level of detail %d: the relevant and later counts are its)", st->lod_level);
+    printf("\n");
     printf("sheets: %llu, tile-sheets shaded: %llu of %llu\n", (unsigned long long)st->sheets,
            (unsigned long long)st->tiles_shaded, (unsigned long long)st->tiles_total);
     printf("%-22s %12s %7s\n", "stage", "ms", "share");
@@ -263,6 +265,7 @@ static void print_stats_table(const vs_stats *st)
         printf("%-22s %12.3f %6.1f%%\n", rows[i].name, rows[i].v, sum > 0 ? 100.0 * rows[i].v / sum : 0.0);
     printf("%-22s %12.3f\n", "sum (over threads)", sum);
     printf("%-22s %12.3f\n", "relevant-voxel list", st->ms_relevant);
+    if (st->ms_lod > 0) printf("%-22s %12.3f\n", "levels of detail", st->ms_lod);
     printf("%-22s %12.3f\n", "total (wall clock)", st->ms_total);
     if (st->pin_warning) printf("note: binding workers to cores failed\n");
     fflush(stdout); /* keep the table ahead of later stderr lines */
