@@ -12,7 +12,10 @@
  * returns NULL, or what broke a promise: a status outside the enum, an
  * error without a message, an image of the wrong size, a colour that is
  * not finite, alpha outside [0,1], images that differ between thread
- * counts.  Sizes stay small so that a case takes milliseconds. */
+ * counts.  Sizes stay small so that a case takes milliseconds; in about a
+ * third of the cases (shape bit 7) the volume is blown up 8x by
+ * replication, up to 56 per side, so that small images splat levels of
+ * detail (600 seeded cases reach levels 1-4 in 164 renders). */
 #ifndef VS_RENDER_CASE_H
 #define VS_RENDER_CASE_H
 
@@ -64,6 +67,7 @@ typedef struct rc_case {
     vs_tf_point tf[8];
     int cancel_after; /* progress calls before asking to stop; <0 never */
     int threads_n;    /* the thread count compared with 1 */
+    int blow_up;      /* replicate each voxel into 8^3 (levels of detail) */
 } rc_case;
 
 typedef struct rc_progress {
@@ -115,6 +119,8 @@ static inline void rc_decode(rc_bytes *b, rc_case *c)
     if (shape % 5 <= 1) { /* one voxel, or 1x1xN along any axis */
         c->dims[0] = c->dims[1] = c->dims[2] = 1;
         if (shape % 5 == 1) c->dims[(shape >> 3) % 3] = 2 + (int)((shape >> 5) % 7) * 2;
+    } else {
+        c->blow_up = (shape >> 7) & 1; /* a bit the shapes above do not read */
     }
     /* anisotropy up to 16:1 (at 165:1 with radius 7.75 one 20x9 image took
      * 1.2 s, 14 s under ASan: slow, not wrong) */
@@ -226,6 +232,26 @@ static inline const char *rc_check(vs_context *const ctxs[4], const uint8_t *dat
         return why;
     }
     rc_fill(&b, v, c.type, (size_t)c.dims[0] * c.dims[1] * c.dims[2]);
+    if (c.blow_up) {
+        const int f = 8, big[3] = {c.dims[0] * f, c.dims[1] * f, c.dims[2] * f};
+        vs_volume *w = NULL;
+        if (vs_volume_create(ctx, c.type, big, c.spacing, &w) != VS_OK) {
+            snprintf(why, cap, "volume_create %dx%dx%d: %s", big[0], big[1], big[2], vs_last_error(ctx));
+            vs_volume_release(v);
+            return why;
+        }
+        const size_t es = c.type == VS_U8 ? 1 : c.type == VS_F32 ? 4 : 2;
+        const char *src = vs_volume_data(v);
+        char *dst = vs_volume_data(w);
+        for (int k = 0; k < big[2]; k++)
+            for (int j = 0; j < big[1]; j++)
+                for (int i = 0; i < big[0]; i++)
+                    memcpy(dst + (((size_t)k * big[1] + j) * big[0] + i) * es,
+                           src + (((size_t)(k / f) * c.dims[1] + j / f) * c.dims[0] + i / f) * es, es);
+        vs_volume_update_range(w);
+        vs_volume_release(v);
+        v = w;
+    }
     const char *fail = NULL;
     vs_image img[2] = {{0, 0, NULL}, {0, 0, NULL}};
     vs_status sts[2];
