@@ -32,6 +32,23 @@ static double loglog_slope(const double *x, const double *y, int n, double *r2)
     return cxy / vx;
 }
 
+/* A case of the series: post-cd, view 20,15; lod 0 full resolution (the
+ * voxel series), 1 the default (the image series), 2 levels of detail
+ * named as such. */
+static void add_case(bench_case *c, const bench_opts *o, const vs_volume *v, int n, int size, int lod)
+{
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = size;
+    s.azimuth = 20;
+    s.elevation = 15;
+    s.threads = o->threads;
+    if (lod == 0) s.lod_pixels = 0;
+    char name[64];
+    snprintf(name, sizeof name, "sphere:%d at %d^2%s", n, size, lod == 2 ? ", lod" : "");
+    bench_case_set(c, name, v, &s);
+}
+
 int bench_growth(const bench_opts *o)
 {
     double t0 = bench_now_ms();
@@ -69,40 +86,9 @@ int bench_growth(const bench_opts *o)
 
     bench_case cases[15];
     int n = 0;
-    for (int i = 0; i < nv; i++) {
-        vs_settings s;
-        vs_settings_init(&s);
-        s.width = s.height = vol_image;
-        s.azimuth = 20;
-        s.elevation = 15;
-        s.threads = o->threads;
-        s.lod_pixels = 0;
-        char name[64];
-        snprintf(name, sizeof name, "sphere:%d at %d^2", vn[i], vol_image);
-        bench_case_set(&cases[n++], name, vols[i], &s);
-    }
-    for (int i = 0; i < ni; i++) {
-        vs_settings s;
-        vs_settings_init(&s);
-        s.width = s.height = in[i];
-        s.azimuth = 20;
-        s.elevation = 15;
-        s.threads = o->threads;
-        char name[64];
-        snprintf(name, sizeof name, "sphere:%d at %d^2", img_volume, in[i]);
-        bench_case_set(&cases[n++], name, ivol, &s);
-    }
-    for (int i = 0; i < nv; i++) {
-        vs_settings s;
-        vs_settings_init(&s);
-        s.width = s.height = vol_image;
-        s.azimuth = 20;
-        s.elevation = 15;
-        s.threads = o->threads;
-        char name[64];
-        snprintf(name, sizeof name, "sphere:%d at %d^2, lod", vn[i], vol_image);
-        bench_case_set(&cases[n++], name, vols[i], &s);
-    }
+    for (int i = 0; i < nv; i++) add_case(&cases[n++], o, vols[i], vn[i], vol_image, 0);
+    for (int i = 0; i < ni; i++) add_case(&cases[n++], o, ivol, img_volume, in[i], 1);
+    for (int i = 0; i < nv; i++) add_case(&cases[n++], o, vols[i], vn[i], vol_image, 2);
     failed += bench_run("growth", cases, n, runs);
 
     double xv[5], yv[5], xi[5], yi[5], xl[5], yl[5];

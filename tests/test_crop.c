@@ -14,21 +14,6 @@
 
 enum { W = 96 };
 
-static vs_image render(vs_context *ctx, const vs_volume *v, const vs_settings *s)
-{
-    vs_image img = {0, 0, NULL};
-    vs_status st = vs_render(ctx, v, s, &img, NULL);
-    CHECK(st == VS_OK, "render: %s", vs_last_error(ctx));
-    return img;
-}
-
-static double psnr(vs_context *ctx, const vs_image *a, const vs_image *b)
-{
-    vs_image_diff d;
-    if (vs_image_compare(ctx, a, b, &d) != VS_OK) return -1;
-    return d.psnr;
-}
-
 /* front over back, both straight with a transparent background; the result
  * straight as the library stores it */
 static vs_image over(const vs_image *front, const vs_image *back)
@@ -50,7 +35,7 @@ static void check_case(vs_context *ctx, const vs_volume *vol, vs_settings s, con
 {
     int d[3];
     vs_volume_dims(vol, d);
-    vs_image whole = render(ctx, vol, &s);
+    vs_image whole = tu_render(ctx, vol, &s, NULL);
 
     /* the whole volume as the box: nothing changes */
     vs_settings c = s;
@@ -59,7 +44,7 @@ static void check_case(vs_context *ctx, const vs_volume *vol, vs_settings s, con
         c.crop_lo[a] = 0;
         c.crop_hi[a] = d[a];
     }
-    vs_image same = render(ctx, vol, &c);
+    vs_image same = tu_render(ctx, vol, &c, NULL);
     CHECK(same.rgba && tu_max_diff(&whole, &same) == 0.0, "%s: whole-volume crop differs by %g", what,
           tu_max_diff(&whole, &same));
 
@@ -70,10 +55,10 @@ static void check_case(vs_context *ctx, const vs_volume *vol, vs_settings s, con
     vs_settings lo = c, hi = c;
     lo.crop_hi[0] = s0;
     hi.crop_lo[0] = s0;
-    vs_image il = render(ctx, vol, &lo), ih = render(ctx, vol, &hi);
+    vs_image il = tu_render(ctx, vol, &lo, NULL), ih = tu_render(ctx, vol, &hi, NULL);
     const double dirx = -sin(s.azimuth * M_PI / 180) * cos(s.elevation * M_PI / 180);
     vs_image comp = dirx < 0 ? over(&ih, &il) : over(&il, &ih);
-    double p = psnr(ctx, &whole, &comp), pl = psnr(ctx, &whole, &il), ph = psnr(ctx, &whole, &ih);
+    double p = tu_psnr(ctx, &whole, &comp), pl = tu_psnr(ctx, &whole, &il), ph = tu_psnr(ctx, &whole, &ih);
     printf("%-28s halves composited %.1f dB (alone %.1f, %.1f)\n", what, p, pl, ph);
     CHECK(p >= 60.0, "%s: halves composited: %.1f dB", what, p);
     CHECK(pl < 40.0 && ph < 40.0, "%s: one half alone is the whole image (%.1f, %.1f dB)", what, pl, ph);
@@ -106,8 +91,8 @@ static void check_case(vs_context *ctx, const vs_volume *vol, vs_settings s, con
         b.zoom = s.zoom * bext / ext;
         b.crop_lo[0] = s0 - x0;
         b.crop_hi[0] = bd[0];
-        vs_image ib = render(ctx, brick, &b);
-        double pb = psnr(ctx, &ih, &ib), mb = ib.rgba ? tu_max_diff(&ih, &ib) : 1;
+        vs_image ib = tu_render(ctx, brick, &b, NULL);
+        double pb = tu_psnr(ctx, &ih, &ib), mb = ib.rgba ? tu_max_diff(&ih, &ib) : 1;
         printf("%-28s brick vs whole-volume crop %.1f dB, max %.2g\n", what, pb, mb);
         CHECK(pb >= 80.0 && mb < 0.02, "%s: the brick does not line up: %.1f dB, max %g", what, pb, mb);
         vs_image_free(&ib);
@@ -139,7 +124,7 @@ int main(void)
     /* the iso-range as the whole volume resolves it, so the brick (another
      * histogram) classifies alike */
     vs_stats st;
-    vs_image tmp = render(ctx, vol, &s);
+    vs_image tmp = tu_render(ctx, vol, &s, NULL);
     vs_image_free(&tmp);
     CHECK(vs_render(ctx, vol, &s, &tmp, &st) == VS_OK, "stats");
     vs_image_free(&tmp);

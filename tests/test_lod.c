@@ -17,21 +17,6 @@
 #include "lod.h"
 #include "testutil.h"
 
-static vs_image render(vs_context *ctx, const vs_volume *v, const vs_settings *s, vs_stats *st)
-{
-    vs_image img = {0, 0, NULL};
-    vs_status rc = vs_render(ctx, v, s, &img, st);
-    CHECK(rc == VS_OK, "render: %s", vs_last_error(ctx));
-    return img;
-}
-
-static double psnr(vs_context *ctx, const vs_image *a, const vs_image *b)
-{
-    vs_image_diff d;
-    if (vs_image_compare(ctx, a, b, &d) != VS_OK) return -1;
-    return d.psnr;
-}
-
 static void centroid(const vs_image *im, double c[2])
 {
     double m = 0, x = 0, y = 0;
@@ -191,7 +176,7 @@ static void test_filter(vs_context *ctx)
 
 static int level_of(vs_context *ctx, const vs_volume *v, vs_settings s, vs_stats *st)
 {
-    vs_image im = render(ctx, v, &s, st);
+    vs_image im = tu_render(ctx, v, &s, st);
     vs_image_free(&im);
     return st->lod_level;
 }
@@ -246,9 +231,9 @@ static void test_registration(vs_context *ctx, const vs_volume *v)
             s.center[0] = 80, s.center[1] = 50, s.center[2] = 70;
             s.perspective_fov = persp ? 30 : 0;
             vs_stats a, b;
-            vs_image lod = render(ctx, v, &s, &a);
+            vs_image lod = tu_render(ctx, v, &s, &a);
             s.lod_pixels = 0;
-            vs_image full = render(ctx, v, &s, &b);
+            vs_image full = tu_render(ctx, v, &s, &b);
             double c0[2], c1[2];
             centroid(&lod, c1);
             centroid(&full, c0);
@@ -286,13 +271,13 @@ static void test_anisotropic(vs_context *ctx)
     s.azimuth = 50, s.elevation = 25;
     s.has_iso = 1, s.iso_lo = 128, s.iso_hi = INFINITY, s.ramp = 20;
     vs_stats a, b;
-    vs_image lod = render(ctx, v, &s, &a);
+    vs_image lod = tu_render(ctx, v, &s, &a);
     s.lod_pixels = 0;
-    vs_image full = render(ctx, v, &s, &b);
+    vs_image full = tu_render(ctx, v, &s, &b);
     double c0[2], c1[2];
     centroid(&lod, c1);
     centroid(&full, c0);
-    const double pf = psnr(ctx, &lod, &full);
+    const double pf = tu_psnr(ctx, &lod, &full);
     CHECK(a.lod_level >= 2 && hypot(c1[0] - c0[0], c1[1] - c0[1]) < 0.1 && pf > 30,
           "anisotropic ball: level %d, centroid moved %.3f,%.3f, %.1f dB", a.lod_level, c1[0] - c0[0],
           c1[1] - c0[1], pf);
@@ -323,9 +308,9 @@ static void test_translucent(vs_context *ctx, const vs_volume *v)
         s.width = s.height = 33;
         s.iso_opacity = 0.01f;
         vs_stats a;
-        vs_image lod = render(ctx, v, &s, &a);
+        vs_image lod = tu_render(ctx, v, &s, &a);
         s.lod_pixels = 0;
-        vs_image full = render(ctx, v, &s, NULL);
+        vs_image full = tu_render(ctx, v, &s, NULL);
         const size_t c = 4 * ((size_t)16 * 33 + 16) + 3;
         CHECK(a.lod_level >= 1 && fabs(lod.rgba[c] - full.rgba[c]) < 0.03,
               "translucent pipeline %d: level %d centre alpha %.3f, full %.3f", p, a.lod_level, lod.rgba[c],
@@ -352,13 +337,13 @@ static void test_transform_change(void)
         s.azimuth = 30, s.elevation = 20;
         s.has_center = 1;
         s.center[0] = 80, s.center[1] = 50, s.center[2] = 70;
-        vs_image im = render(a, v, &s, NULL);
+        vs_image im = tu_render(a, v, &s, NULL);
         vs_image_free(&im);
         /* x flipped and the axes moved: a patient frame */
         const double m[12] = {-1, 0, 0, 127, 0, 0, 1, 10, 0, 1, 0, -5};
         CHECK(vs_volume_set_transform(a, v, m) == VS_OK, "set_transform: %s", vs_last_error(a));
         vs_stats sa;
-        vs_image moved = render(a, v, &s, &sa), fresh = render(b, v, &s, NULL);
+        vs_image moved = tu_render(a, v, &s, &sa), fresh = tu_render(b, v, &s, NULL);
         CHECK(sa.lod_level >= 1 && tu_max_diff(&moved, &fresh) == 0.0,
               "after a new transform, level %d: the kept levels' frame differs from a fresh one by %g", sa.lod_level,
               tu_max_diff(&moved, &fresh));
@@ -390,9 +375,9 @@ static void test_thin_and_clip(vs_context *ctx)
         s.iso_opacity = 0.5f;
         s.elevation = 80; /* nearly face-on */
         vs_stats a;
-        vs_image lod = render(ctx, v, &s, &a);
+        vs_image lod = tu_render(ctx, v, &s, &a);
         s.lod_pixels = 0;
-        vs_image full = render(ctx, v, &s, NULL);
+        vs_image full = tu_render(ctx, v, &s, NULL);
         const double ml = alpha_sum(&lod), mf = alpha_sum(&full);
         /* filtering the disc's edge moves some 8 %; a halved slice once
          * nearly doubled it */
@@ -418,9 +403,9 @@ static void test_thin_and_clip(vs_context *ctx)
     s.has_iso = 1, s.iso_lo = -50, s.iso_hi = INFINITY, s.ramp = 20;
     s.iso_opacity = 0.02f;
     vs_stats a;
-    vs_image lod = render(ctx, v, &s, &a);
+    vs_image lod = tu_render(ctx, v, &s, &a);
     s.lod_pixels = 0;
-    vs_image full = render(ctx, v, &s, NULL);
+    vs_image full = tu_render(ctx, v, &s, NULL);
     int wl = 0, wf = 0;
     for (int x = 0; x < 40; x++) {
         wl += lod.rgba[4 * (20 * 40 + x) + 3] > 0.01f;
@@ -442,21 +427,21 @@ static void test_accuracy(vs_context *ctx)
     vs_settings_init(&s);
     s.width = s.height = 64;
     s.pipeline = VS_PIPELINE_RAYCAST;
-    vs_image truth = render(ctx, v, &s, NULL);
+    vs_image truth = tu_render(ctx, v, &s, NULL);
     s.pipeline = VS_PIPELINE_POST_CD;
     vs_stats a, b;
     s.threads = 2;
-    vs_image lod = render(ctx, v, &s, &a);
+    vs_image lod = tu_render(ctx, v, &s, &a);
     /* one thread in a context of its own: the levels built on one thread */
     vs_context *c1 = NULL;
     vs_image one = {0, 0, NULL};
     s.threads = 1;
-    if (vs_context_create(&c1) == VS_OK) one = render(c1, v, &s, NULL);
+    if (vs_context_create(&c1) == VS_OK) one = tu_render(c1, v, &s, NULL);
     vs_context_release(c1);
     s.threads = 2;
     s.lod_pixels = 0;
-    vs_image full = render(ctx, v, &s, &b);
-    const double pl = psnr(ctx, &lod, &truth), pf = psnr(ctx, &full, &truth);
+    vs_image full = tu_render(ctx, v, &s, &b);
+    const double pl = tu_psnr(ctx, &lod, &truth), pf = tu_psnr(ctx, &full, &truth);
     CHECK(a.lod_level == 2 && pl >= 42.0 && pl >= pf - 5.0, "sphere 256 at 64x64: level %d %.1f dB, full %.1f dB",
           a.lod_level, pl, pf);
     CHECK(tu_max_diff(&lod, &one) == 0.0, "1 and 2 threads differ by %g", tu_max_diff(&lod, &one));

@@ -109,6 +109,23 @@ static inline void tu_write_file(const char *path, const void *data, size_t n)
     fclose(f);
 }
 
+/* A frame, with a failed check (and an empty image) if vs_render fails. */
+static inline vs_image tu_render(vs_context *ctx, const vs_volume *v, const vs_settings *s, vs_stats *st)
+{
+    vs_image img = {0, 0, NULL};
+    vs_status rc = vs_render(ctx, v, s, &img, st);
+    CHECK(rc == VS_OK, "render: %s", vs_last_error(ctx));
+    return img;
+}
+
+/* PSNR of two images of the same size (vs_image_compare), -1 if it fails. */
+static inline double tu_psnr(vs_context *ctx, const vs_image *a, const vs_image *b)
+{
+    vs_image_diff d;
+    if (vs_image_compare(ctx, a, b, &d) != VS_OK) return -1;
+    return d.psnr;
+}
+
 /* A synthetic scene (vs_volume_scene), or NULL after a failed check. */
 static inline vs_volume *tu_scene(vs_context *ctx, const char *spec)
 {
