@@ -73,6 +73,15 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
         const unsigned group = U16(e), elem = U16(e + 2);
         /* items and delimiters (group FFFE) have no VR in any syntax */
         const int ex = group != 0xFFFEu && (in_meta || (explicit_vr < 0 ? known_vr(e + 4) : explicit_vr));
+        /* GDCM reads an unknown VR of a little-endian data set as implicit
+         * (as below); in a big-endian one it gives up and rereads the file
+         * little-endian, misreading lengths (4 GB for a 639-byte file) */
+        if (be && ex && !known_vr(e + 4)) {
+            st = vs_set_error(ctx, VS_ERR_FORMAT,
+                              "%s: malformed DICOM: element (%04x,%04x) of a big-endian data set has no valid VR",
+                              path, group, elem);
+            break;
+        }
         if (!in_meta && explicit_vr < 0) explicit_vr = ex;
         uint64_t len, head = 8;
         if (ex && known_vr(e + 4) && !long_vr(e + 4)) {
