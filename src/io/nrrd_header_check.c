@@ -123,6 +123,10 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
                 st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD header line over %d bytes", path, LINE_MAX_BYTES);
                 break;
             }
+            if (c == '\0') { /* Teem reads past it, this check would not */
+                st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD header line holds a NUL byte", path);
+                break;
+            }
             line[n++] = (char)c;
         }
         if (st != VS_OK) break;
