@@ -53,6 +53,7 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
     int in_meta = 1, explicit_vr = -1; /* -1: the data set's VR rule not known yet */
     int be = 0;                        /* the data set is big-endian */
     int encapsulated = 0;              /* inside pixel data of undefined length */
+    unsigned depth = 0;                /* open sequences (and pixel data) of undefined length */
     vs_status st = VS_OK;
     char ts[65] = "";
     while (st == VS_OK && pos + 8 <= size) {
@@ -104,9 +105,20 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
                               path, group, elem);
             break;
         }
-        if (group == 0xFFFEu && elem == 0xE0DDu) encapsulated = 0;
+        /* an item belongs in a sequence: GDCM, meeting one in the data set
+         * itself, rereads the file with VRs guessed and took 4 GB for a
+         * 1194-byte one (fuzz_dicom) */
+        if (group == 0xFFFEu && elem == 0xE000u && depth == 0) {
+            st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: malformed DICOM: an item outside any sequence", path);
+            break;
+        }
+        if (group == 0xFFFEu && elem == 0xE0DDu) {
+            encapsulated = 0;
+            if (depth) depth--;
+        }
         if (len == 0xFFFFFFFFu || (group == 0xFFFEu && elem != 0xE000u)) {
             if (group == 0x7FE0u && elem == 0x0010u) encapsulated = 1;
+            if (group != 0xFFFEu) depth++;
             pos += head; /* undefined length: its items follow; delimiters: nothing */
             continue;
         }
