@@ -276,9 +276,11 @@ static void free_frame(vs_frame *F, int nspans)
 }
 
 /* vol is what is splatted: the volume `full` or one of its levels of
- * detail (the classification comes from the full volume either way). */
+ * detail (the classification comes from the full volume either way);
+ * lod_span, when not NULL, is when that level was built, just before. */
 static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, const struct vs_volume *full,
-                              struct vs_relevant_cache **rel_slot, const vs_settings *s, vs_image *out, vs_stats *st)
+                              struct vs_relevant_cache **rel_slot, const vs_settings *s, vs_image *out, vs_stats *st,
+                              const double *lod_span)
 {
     double t_start = vs_now_ms();
     vs_frame F;
@@ -416,6 +418,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
             rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory for the trace");
             goto fail;
         }
+        if (lod_span) vs_span_add(&F.spans[0], VS_SPAN_LOD, 0, -1, lod_span[0], lod_span[1]);
         vs_span_add(&F.spans[0], VS_SPAN_SETUP, 0, -1, t_start, t_rel);
         if (rebuilt) vs_span_add(&F.spans[0], VS_SPAN_RELEVANT, 0, -1, t_rel, t_rel_end);
     }
@@ -553,7 +556,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         st->ms_total = vs_now_ms() - t_start;
     }
     if (F.spans) {
-        vs_span_add(&F.spans[0], VS_SPAN_FRAME, 0, -1, t_start, vs_now_ms());
+        vs_span_add(&F.spans[0], VS_SPAN_FRAME, 0, -1, lod_span ? lod_span[0] : t_start, vs_now_ms());
         for (int w = 0; w < nthreads; w++)
             if (!vs_trace_append(s->trace, &F.spans[w])) break;
         vs_trace_frame_done(s->trace);
@@ -573,7 +576,7 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
                             vs_stats *st)
 {
     int level = 0;
-    double ms_lod = 0.0;
+    double ms_lod = 0.0, lod_span[2] = {0.0, 0.0};
     const vs_volume *lv = vol;
     vs_settings ls;
     if (s->lod_pixels > 0.0 && !s->has_crop) {
@@ -583,6 +586,7 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         level = vs_lod_choose(vol, s, &cam);
         if (level > 0) {
             if ((rc = vs_context_pool(ctx, s)) != VS_OK) return rc;
+            lod_span[0] = vs_now_ms();
             if (vs_lod_get(ctx, ctx->pool, &ctx->lod, vol, level, &lv, &ms_lod) != VS_OK) {
                 /* out of memory, or a level the volume's limits refuse:
                  * the frame at full resolution rather than none */
@@ -601,8 +605,9 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
             s = &ls;
         }
     }
-    vs_status rc =
-        render_splat(ctx, lv, vol, level ? &ctx->lod->relevant[level] : &ctx->relevant, s, out, st);
+    lod_span[1] = vs_now_ms();
+    vs_status rc = render_splat(ctx, lv, vol, level ? &ctx->lod->relevant[level] : &ctx->relevant, s, out, st,
+                                ms_lod > 0.0 ? lod_span : NULL);
     if (rc == VS_OK && st) {
         st->lod_level = level;
         st->ms_lod = ms_lod;

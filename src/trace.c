@@ -18,7 +18,7 @@ struct vs_trace {
 };
 
 static const char *const span_names[VS_SPAN_COUNT] = {
-    "frame", "setup", "relevant voxels", "binning", "tiles", "ray casting", "tile",
+    "frame", "setup", "relevant voxels", "levels of detail", "binning", "tiles", "ray casting", "tile",
     "projection", "splatting", "classification", "shading", "compositing", "occlusion map"};
 
 int vs_span_grow(vs_span_buf *b)

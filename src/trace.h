@@ -15,6 +15,7 @@ typedef enum vs_span_name {
     VS_SPAN_FRAME,     /* vs_render, on the calling thread                 */
     VS_SPAN_SETUP,     /* camera, classification, kernel and shading tables */
     VS_SPAN_RELEVANT,  /* building the relevant-voxel list                  */
+    VS_SPAN_LOD,       /* building levels of detail (first frame to use one) */
     VS_SPAN_BIN,       /* bricks projected and binned into tiles            */
     VS_SPAN_TILES,     /* the tiles on the pool                             */
     VS_SPAN_RAYCAST,   /* the ray caster's rows on the pool                 */

@@ -235,6 +235,63 @@ int main(void)
         vs_trace_release(tr);
     }
 
+    /* levels of detail: the frame that builds a level shows the build as a
+     * span inside its frame span, as long as the stats say; the next frame,
+     * which reuses it, shows none */
+    {
+        vs_trace *tr = NULL;
+        CHECK(vs_trace_create(&tr) == VS_OK, "vs_trace_create");
+        vs_settings l = s;
+        l.pipeline = VS_PIPELINE_POST_CD;
+        l.width = l.height = 40;
+        l.tile_size = 8;
+        l.trace = tr;
+        vs_context *c2 = NULL;
+        CHECK(vs_context_create(&c2) == VS_OK, "context");
+        vs_image img;
+        vs_stats st, st2;
+        CHECK(vs_render(c2, v, &l, &img, &st) == VS_OK, "render: %s", vs_last_error(c2));
+        CHECK(st.lod_level > 0 && st.ms_lod > 0, "a 96^3 sphere at 40x40 used level %d (%.3f ms building it)",
+              st.lod_level, st.ms_lod);
+        vs_image_free(&img);
+        char path[600];
+        snprintf(path, sizeof path, "%s/lod.json", dir);
+        CHECK(vs_trace_write(c2, tr, path) == VS_OK, "write: %s", vs_last_error(c2));
+        check_trace(path, &st, st.threads);
+        size_t len = 0;
+        char *text = (char *)tu_read_file(path, &len);
+        cJSON *root = text ? cJSON_ParseWithLength(text, len) : NULL;
+        int spans = 0;
+        double ms = 0;
+        const cJSON *e;
+        cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(root, "traceEvents"))
+        {
+            const cJSON *name = cJSON_GetObjectItemCaseSensitive(e, "name");
+            if (cJSON_IsString(name) && !strcmp(name->valuestring, "levels of detail")) {
+                spans++;
+                ms = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(e, "dur")) * 1e-3;
+            }
+        }
+        CHECK(spans == 1, "%d levels-of-detail spans in the first frame", spans);
+        CHECK(ms >= st.ms_lod - 1e-3, "the levels-of-detail span lasts %.4f ms, the stats say %.4f", ms, st.ms_lod);
+        printf("levels of detail: level %d built in %.3f ms, one span of %.3f ms\n", st.lod_level, st.ms_lod, ms);
+        cJSON_Delete(root);
+        free(text);
+        const size_t n1 = vs_trace_spans(tr);
+        CHECK(vs_render(c2, v, &l, &img, &st2) == VS_OK, "second render");
+        CHECK(st2.lod_level == st.lod_level && st2.ms_lod == 0.0, "the second frame rebuilt the level");
+        CHECK(vs_trace_spans(tr) > n1, "the second frame added no spans");
+        vs_image_free(&img);
+        CHECK(vs_trace_write(c2, tr, path) == VS_OK, "write: %s", vs_last_error(c2));
+        text = (char *)tu_read_file(path, &len);
+        int again = 0;
+        for (const char *q = text; q && (q = strstr(q, "\"levels of detail\"")); q++) again++;
+        CHECK(again == 1, "%d levels-of-detail spans after a frame that reused the level", again);
+        free(text);
+        vs_context_release(c2);
+        vs_trace_release(tr);
+    }
+
     /* the ray caster: one frame span, one ray-casting span */
     {
         vs_trace *tr = NULL;
