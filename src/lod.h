@@ -4,8 +4,9 @@
  * and decimated by 2 along its finer axes (lod.c says which); its voxels are splatted with the same
  * kernel in level units, i.e. a Gaussian as much wider in the volume's,
  * which is the reconstruction of the filtered signal at the coarser scale.
- * The levels are built on first use and kept in the context, keyed, like
- * the relevant voxels, on the volume's serial. */
+ * The levels are built on first use and kept in the context, keyed on the
+ * volume's data serial (a new range re-ranges them, a new transform
+ * re-places them). */
 #ifndef VS_LOD_H
 #define VS_LOD_H
 
@@ -17,7 +18,7 @@
 
 typedef struct vs_lod_cache {
     const struct vs_volume *vol; /* key: the full-resolution volume */
-    uint64_t serial;
+    uint64_t serial, data_serial; /* the volume's when the levels were built or last ranged */
     double spacing[3], affine[3][4]; /* its geometry when the levels were built */
     int has_orientation;
     struct vs_volume *level[VS_LOD_MAX + 1]; /* [0] unused: the volume itself */

@@ -64,7 +64,7 @@ vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3]
     }
     v->default_iso = NAN;
     v->default_ramp = NAN;
-    v->serial = atomic_fetch_add(&volume_serial, 1) + 1;
+    v->serial = v->data_serial = atomic_fetch_add(&volume_serial, 1) + 1;
     *out = v;
     return VS_OK;
 }
@@ -170,7 +170,7 @@ void vs_volume_update_range(vs_volume *v)
     if (lo > hi) lo = hi = 0.0; /* no finite value at all */
     v->vmin = lo;
     v->vmax = hi;
-    v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* the data may have changed */
+    v->serial = v->data_serial = atomic_fetch_add(&volume_serial, 1) + 1; /* the data may have changed */
 }
 
 vs_status vs_volume_set_range(vs_volume *v, double lo, double hi)
@@ -178,9 +178,11 @@ vs_status vs_volume_set_range(vs_volume *v, double lo, double hi)
     if (!v || !isfinite(lo) || !isfinite(hi) || lo > hi) return VS_ERR_INVALID_ARGUMENT;
     v->vmin = lo;
     v->vmax = hi;
-    v->serial = atomic_fetch_add(&volume_serial, 1) + 1; /* tables keyed on the range */
+    vs_volume_new_serial(v); /* tables keyed on the range; the voxels are the same */
     return VS_OK;
 }
+
+void vs_volume_new_serial(struct vs_volume *v) { v->serial = atomic_fetch_add(&volume_serial, 1) + 1; }
 
 double vs_volume_default_iso(const vs_volume *v)
 {

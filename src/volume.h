@@ -38,6 +38,8 @@ struct vs_volume {
     uint64_t serial;     /* unique per allocation and per vs_volume_update_range:
                             what caches key on (an address can be reused, and
                             data rewritten in place keeps it) */
+    uint64_t data_serial; /* the same, but kept by vs_volume_set_range: what
+                             depends on the voxels alone (levels of detail) */
     /* who frees data: the library (wrapped 0) or the caller's release
      * callback (vs_volume_wrap, src/volume_wrap.c) */
     int wrapped;
@@ -91,6 +93,8 @@ vs_status vs_volume_set_affine(vs_context *ctx, struct vs_volume *v, const doubl
  * Sets ctx error. */
 vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3],
                                 const double spacing[3], struct vs_volume **out);
+/* A fresh serial: the caches keyed on the old one are rebuilt. */
+void vs_volume_new_serial(struct vs_volume *v);
 /* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out);

@@ -472,9 +472,28 @@ static void test_cache(vs_context *ctx, vs_volume *v)
     level_of(ctx, v, s, &a);
     CHECK(a.lod_level == 2 && a.ms_relevant == 0.0, "back at level 2 the relevant voxels were rebuilt (%.3f ms)",
           a.ms_relevant);
+    /* a new range keeps the levels (their voxels do not depend on it) but
+     * classifies them anew: the frame a fresh context renders, bit for bit */
     double lo, hi;
     vs_volume_range(v, &lo, &hi);
-    CHECK(vs_volume_set_range(v, lo, hi) == VS_OK, "set_range");
+    vs_image before = tu_render(ctx, v, &s, &a);
+    CHECK(vs_volume_set_range(v, lo, lo + 2.0 * (hi - lo)) == VS_OK, "set_range");
+    vs_image kept = tu_render(ctx, v, &s, &a);
+    CHECK(tu_max_diff(&before, &kept) > 0.0, "the range changed nothing in the frame: the test below is vacuous");
+    vs_image_free(&before);
+    CHECK(a.lod_level == 2 && a.ms_lod == 0.0, "a new range rebuilt the levels (%.3f ms)", a.ms_lod);
+    vs_context *fresh = NULL;
+    CHECK(vs_context_create(&fresh) == VS_OK, "context");
+    vs_stats f;
+    vs_image ref = tu_render(fresh, v, &s, &f);
+    CHECK(f.lod_level == 2 && tu_max_diff(&kept, &ref) == 0.0,
+          "after a new range the kept levels' frame differs from a fresh context's by %g", tu_max_diff(&kept, &ref));
+    vs_image_free(&kept);
+    vs_image_free(&ref);
+    vs_context_release(fresh);
+    CHECK(vs_volume_set_range(v, lo, hi) == VS_OK, "set_range back");
+    /* vs_volume_update_range says the voxels may have changed: rebuilt */
+    vs_volume_update_range((vs_volume *)v);
     level_of(ctx, v, s, &a);
     CHECK(a.ms_lod > 0.0, "a changed volume kept its old levels");
 }
