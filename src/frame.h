@@ -50,6 +50,12 @@ typedef struct vs_frame {
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
     const struct vs_preint *preint;  /* pre-integrated classification between
                                         sheets (post-cd, post-gs), or NULL      */
+    /* Post-classified pipelines splat value - base (vs_volume_base: the
+     * volume's minimum when negative) and add it back where a sheet is
+     * classified: at the volume's faces, where fewer voxels reach, the
+     * reconstruction falls to the minimum (CT's air stays air) rather than
+     * to 0, as the ray caster's does.  0 for pre-shaded splatting. */
+    double base;
     int clip_to_volume;              /* empty space is visible: pixels whose sheet
                                         point lies outside the volume stay clear */
     double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */

@@ -156,10 +156,10 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
     return 1;
 }
 
-void vs_preint_alpha_row(const vs_preint *p, float *alpha, const float *q, const float *qn, int qs, int n)
+void vs_preint_alpha_row(const vs_preint *p, float base, float *alpha, const float *q, const float *qn, int qs, int n)
 {
     for (int i = 0; i < n; i++) {
-        const vs_preint_at a = vs_preint_locate(p, q[(ptrdiff_t)i * qs], qn[(ptrdiff_t)i * qs]);
+        const vs_preint_at a = vs_preint_locate(p, q[(ptrdiff_t)i * qs] + base, qn[(ptrdiff_t)i * qs] + base);
         alpha[i] = vs_preint_get(p, &a, 0);
     }
 }

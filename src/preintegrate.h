@@ -87,7 +87,8 @@ static inline float vs_preint_position(const vs_preint *p, const vs_preint_at *a
     return t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
 }
 
-/* A span's opacities from the table: alpha[i] at (q[i * qs], qn[i * qs]). */
-void vs_preint_alpha_row(const vs_preint *p, float *alpha, const float *q, const float *qn, int qs, int n);
+/* A span's opacities from the table: alpha[i] at (q[i * qs], qn[i * qs]),
+ * sheet values to which base is added (vs_frame.base). */
+void vs_preint_alpha_row(const vs_preint *p, float base, float *alpha, const float *q, const float *qn, int qs, int n);
 
 #endif

@@ -37,6 +37,9 @@ typedef struct rc_job {
     vs_light light;
     int mode;
     double R, R2, b;       /* kernel radius, its square, normalization      */
+    double base;           /* sampled volumes: values are reconstructed less
+                              this (the volume's minimum), as splatting does,
+                              so that outside the volume reads as the minimum */
     double step;           /* view units                                    */
     double box_lo[3], box_hi[3]; /* index box where samples are taken      */
     int refine;            /* bisect iso crossings (analytic, iso-range)    */
@@ -49,38 +52,39 @@ typedef struct rc_job {
     atomic_int rows_done, cancel;
 } rc_job;
 
-/* ---- voxel access (outside the volume counts as 0) ---- */
+/* ---- voxel access: values less base; outside the volume, and non-finite
+ * values, count as base (0 here) ---- */
 
-/* Values of row (j,k) at x = i0..i1 (all inside) into out[]. */
-static void fetch_row(const struct vs_volume *v, int j, int k, int i0, int i1, double *out)
+/* Values of row (j,k) at x = i0..i1 (all inside), less base, into out[]. */
+static void fetch_row(const struct vs_volume *v, int j, int k, int i0, int i1, double *out, double base)
 {
-    size_t base = ((size_t)k * v->dims[1] + j) * v->dims[0];
+    size_t row = ((size_t)k * v->dims[1] + j) * v->dims[0];
     int n = i1 - i0 + 1;
     switch (v->type) {
     case VS_U8: {
-        const uint8_t *p = (const uint8_t *)v->data + base + i0;
-        for (int i = 0; i < n; i++) out[i] = p[i];
+        const uint8_t *p = (const uint8_t *)v->data + row + i0;
+        for (int i = 0; i < n; i++) out[i] = p[i] - base;
     } break;
     case VS_I16: {
-        const int16_t *p = (const int16_t *)v->data + base + i0;
-        for (int i = 0; i < n; i++) out[i] = p[i];
+        const int16_t *p = (const int16_t *)v->data + row + i0;
+        for (int i = 0; i < n; i++) out[i] = p[i] - base;
     } break;
     case VS_U16: {
-        const uint16_t *p = (const uint16_t *)v->data + base + i0;
-        for (int i = 0; i < n; i++) out[i] = p[i];
+        const uint16_t *p = (const uint16_t *)v->data + row + i0;
+        for (int i = 0; i < n; i++) out[i] = p[i] - base;
     } break;
     default: {
-        const float *p = (const float *)v->data + base + i0;
-        for (int i = 0; i < n; i++) out[i] = isfinite(p[i]) ? p[i] : 0.0;
+        const float *p = (const float *)v->data + row + i0;
+        for (int i = 0; i < n; i++) out[i] = isfinite(p[i]) ? p[i] - base : 0.0;
     } break;
     }
 }
 
-static double voxel(const struct vs_volume *v, int i, int j, int k)
+static double voxel(const struct vs_volume *v, int i, int j, int k, double base)
 {
     if (i < 0 || j < 0 || k < 0 || i >= v->dims[0] || j >= v->dims[1] || k >= v->dims[2]) return 0.0;
     double x = vs_volume_at(v, ((size_t)k * v->dims[1] + j) * v->dims[0] + i);
-    return isfinite(x) ? x : 0.0;
+    return isfinite(x) ? x - base : 0.0;
 }
 
 /* ---- Gaussian reconstruction: f(p) = b sum_j f_j 2^(-2|p-j|^2), |p-j| <= R ---- */
@@ -116,7 +120,7 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
             double ry = rz - d2[1][jj];
             if (ry < 0.0) continue;
             double wyz = w[1][jj] * w[2][kk];
-            fetch_row(v, j, k, lo[0], hi[0], row);
+            fetch_row(v, j, k, lo[0], hi[0], row, J->base);
             double rs = 0.0, rx = 0.0;
             for (int i = 0; i <= hi[0] - lo[0]; i++) {
                 if (d2[0][i] > ry) continue;
@@ -159,14 +163,15 @@ static double trilinear_sample(const rc_job *J, const double p[3], double g[3])
         for (int c = 0; c < 8; c++) {
             int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
             double wt = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
-            if (wt != 0.0) val += wt * voxel(v, i0[0] + dx, i0[1] + dy, i0[2] + dz);
+            if (wt != 0.0) val += wt * voxel(v, i0[0] + dx, i0[1] + dy, i0[2] + dz, J->base);
         }
         return val;
     }
     double win[4][4][4]; /* voxels i0-1 .. i0+2 */
     for (int z = 0; z < 4; z++)
         for (int y = 0; y < 4; y++)
-            for (int x = 0; x < 4; x++) win[z][y][x] = voxel(v, i0[0] - 1 + x, i0[1] - 1 + y, i0[2] - 1 + z);
+            for (int x = 0; x < 4; x++)
+                win[z][y][x] = voxel(v, i0[0] - 1 + x, i0[1] - 1 + y, i0[2] - 1 + z, J->base);
     double val = 0.0;
     g[0] = g[1] = g[2] = 0.0;
     for (int c = 0; c < 8; c++) {
@@ -185,8 +190,8 @@ static double sample_value(const rc_job *J, const double p[3])
 {
     switch (J->mode) {
     case MODE_ANALYTIC: return J->vol->analytic.f(J->vol->analytic.params, p);
-    case MODE_GAUSS: return gauss_sample(J, p, NULL);
-    default: return trilinear_sample(J, p, NULL);
+    case MODE_GAUSS: return gauss_sample(J, p, NULL) + J->base;
+    default: return trilinear_sample(J, p, NULL) + J->base;
     }
 }
 
@@ -447,7 +452,7 @@ static int gauss_brick_bounds(const skip_build *B, float *hi, float *neg)
     }
     size_t layer = (size_t)J->nb[0] * J->nb[1];
     for (size_t i = 0; i < (size_t)(B->b1 - B->b0) * layer; i++) hi[i] = neg[i] = 0.0f;
-    int passes = v->vmin < 0.0 ? 2 : 1;
+    int passes = v->vmin - J->base < 0.0 ? 2 : 1; /* values below the base */
     for (int pass = 0; pass < passes; pass++) {
         float *out = pass == 0 ? hi : neg;
         int have = -1; /* highest slice k filtered into the ring */
@@ -459,7 +464,7 @@ static int gauss_brick_bounds(const skip_build *B, float *hi, float *neg)
             if (have < kmin - 1) have = kmin - 1;
             for (int k = have + 1; k <= kmax; k++) {
                 for (int j = 0; j < ny; j++) { /* x */
-                    fetch_row(v, j, k, 0, nx - 1, row);
+                    fetch_row(v, j, k, 0, nx - 1, row, J->base);
                     for (int i = 0; i < nx; i++) {
                         double x = pass == 0 ? row[i] : -row[i];
                         pad[poff + i] = x > 0.0 ? (float)x : 0.0f;
@@ -543,7 +548,7 @@ static void skip_chunk(skip_build *B)
         for (int k = have + 1; k <= iz[2 * b + 1]; k++) {
             /* x: per voxel row and x-brick (empty interval -> +inf/-inf) */
             for (int j = 0; j < ny; j++) {
-                fetch_row(v, j, k, 0, nx - 1, row);
+                fetch_row(v, j, k, 0, nx - 1, row, J->base);
                 float *mn = amin + (size_t)j * bx, *mx = amax + (size_t)j * bx;
                 for (int x = 0; x < bx; x++) {
                     double lo = INFINITY, hi = -INFINITY;
@@ -582,7 +587,7 @@ static void skip_chunk(skip_build *B)
                     if (cmin[i] < m) m = cmin[i];
                     if (cmax[i] > M) M = cmax[i];
                 }
-                if (B->zx[x] || B->zy[y] || B->zz[b]) { /* voxels outside count as 0 */
+                if (B->zx[x] || B->zy[y] || B->zz[b]) { /* voxels outside count as base, 0 here */
                     if (m > 0.0) m = 0.0;
                     if (M < 0.0) M = 0.0;
                 }
@@ -592,7 +597,8 @@ static void skip_chunk(skip_build *B)
                     vhi = fmin(vhi, kb_hi[bl]);
                     vlo = fmax(vlo, -(double)kb_neg[bl]);
                 }
-                J->skip[((size_t)b * by + y) * bx + x] = (uint8_t)(vhi < c->alpha_lo || vlo > c->alpha_hi);
+                J->skip[((size_t)b * by + y) * bx + x] =
+                    (uint8_t)(vhi < c->alpha_lo - J->base || vlo > c->alpha_hi - J->base);
             }
     }
     free(amin); free(amax); free(cmin); free(cmax); free(row); free(kb_hi); free(kb_neg);
@@ -691,6 +697,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
     J->mode = (s->ray_analytic && vol->has_analytic) ? MODE_ANALYTIC
               : s->ray_trilinear                     ? MODE_TRILINEAR
                                                      : MODE_GAUSS;
+    J->base = J->mode == MODE_ANALYTIC ? 0.0 : vs_volume_base(vol);
     J->R = s->kernel_radius;
     J->R2 = J->R * J->R;
     J->b = vs_kernel_b(J->R);

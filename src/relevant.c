@@ -231,9 +231,10 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
     }
     vs_pool_run(pool, d[2], classify_planes, &J);
     free(lut);
-    if (in_alpha_range(c, 0.0) && seam > 0) {
-        /* Empty space is visible (opacity at 0 is > 0): a voxel left out
-         * would read as 0 and become opaque, so nothing may be left out. */
+    if (in_alpha_range(c, vs_volume_base(vol)) && seam > 0) {
+        /* Empty space is visible (opacity at what the volume reads
+         * outside, vs_volume_base, is > 0): a voxel left out would read as
+         * that and become opaque, so nothing may be left out. */
         memset(mask, 1, n);
     } else if (seam > 0) {
         /* Post-classified pipelines: the iso-range is met between voxels
@@ -364,4 +365,4 @@ vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_p
     return VS_OK;
 }
 
-int vs_classify_zero_visible(const vs_classify *c) { return in_alpha_range(c, 0.0); }
+int vs_classify_value_visible(const vs_classify *c, double v) { return in_alpha_range(c, v); }

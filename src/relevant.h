@@ -57,8 +57,9 @@ vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_p
                           const struct vs_volume *vol, const vs_classify *c, int seam, const vs_relevant_cache **out,
                           int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
-/* Does the classification give value 0 (empty space) a non-zero opacity?
- * Then every voxel is relevant and sheets are clipped to the volume. */
-int vs_classify_zero_visible(const vs_classify *c);
+/* Does the classification give value v a non-zero opacity?  With v what
+ * the volume reads outside (vs_volume_base), every voxel is relevant and
+ * sheets are clipped to the volume. */
+int vs_classify_value_visible(const vs_classify *c, double v);
 
 #endif

@@ -374,7 +374,8 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
     /* a crop face inside the volume clips; the volume's own faces clip only
      * when empty space is visible, as without a crop box */
-    const int zero_vis = s->pipeline != VS_PIPELINE_PRE && vs_classify_zero_visible(F.cls);
+    F.base = s->pipeline == VS_PIPELINE_PRE ? 0.0 : vs_volume_base(full);
+    const int zero_vis = s->pipeline != VS_PIPELINE_PRE && vs_classify_value_visible(F.cls, F.base);
     F.clip_to_volume = zero_vis || s->has_crop;
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];

@@ -68,7 +68,7 @@ void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w
     const float bscale = (float)(F->fp.b / F->fp.slab);
     for (unsigned m = live; m; m &= m - 1) {
         const int l = __builtin_ctz(m);
-        w[l][0] = vs_volume_density(F->vol, p[l].v) * bscale;
+        w[l][0] = vs_volume_density_above(F->vol, p[l].v, F->base) * bscale;
         w[l][1] = w[l][2] = w[l][3] = 0.0f;
     }
 }
@@ -135,7 +135,7 @@ static inline void weights_shaded(const vs_frame *F, const pend *p, unsigned liv
             w[l][0] = d[l] * alpha[l] * bscale;
             w[l][1] = sp[l] * alpha[l] * bscale;
             w[l][2] = alpha[l] * bscale;
-            w[l][3] = val[l] * bscale;
+            w[l][3] = (float)(val[l] - F->base) * bscale;
         }
     }
 }
@@ -194,7 +194,7 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             float *c = sb.g + 3 * o;
             float d, spec, rgb[3];
             shade_gradient(F, c[0], c[1], c[2], &d, &spec);
-            lookup_color(F, sv->q[ch * b], rgb);
+            lookup_color(F, sv->q[ch * b] + (float)F->base, rgb);
             c[0] = rgb[0] * d + spec;
             c[1] = rgb[1] * d + spec;
             c[2] = rgb[2] * d + spec;
@@ -224,8 +224,8 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;
             float d, spec, e[4];
-            const float qf = sv->q[ch * b], qb = sv->next[ch * b];
-            const vs_preint_at at = vs_preint_locate(F->preint, qf, qb);
+            const float qf = sv->q[ch * b], qb = sv->next[ch * b], base = (float)F->base;
+            const vs_preint_at at = vs_preint_locate(F->preint, qf + base, qb + base);
             for (int i = 0; i < 4; i++) e[i] = vs_preint_get(F->preint, &at, i);
             float g[3] = {c[0], c[1], c[2]};
             const float w = mix ? vs_preint_position(F->preint, &at, e[0]) : 0.0f;
@@ -311,7 +311,7 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 d = (float)dd;
                 spec = (float)ss;
             }
-            lookup_color(F, q[4 * b + 3], rgb);
+            lookup_color(F, q[4 * b + 3] + (float)F->base, rgb);
             for (int i = 0; i < 3; i++) c[i] = rgb[i] * d + spec;
         }
 }

@@ -182,6 +182,12 @@ vs_status vs_volume_set_range(vs_volume *v, double lo, double hi)
     return VS_OK;
 }
 
+double vs_volume_base(const struct vs_volume *v)
+{
+    if (!(v->vmin < 0.0) || !(v->vmin < v->vmax) || !(v->vmax - v->vmin <= 0.25 * FLT_MAX)) return 0.0;
+    return v->vmin;
+}
+
 void vs_volume_new_serial(struct vs_volume *v) { v->serial = atomic_fetch_add(&volume_serial, 1) + 1; }
 
 double vs_volume_default_iso(const vs_volume *v)

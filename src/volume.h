@@ -65,6 +65,12 @@ static inline float vs_volume_density(const struct vs_volume *v, size_t i)
     double x = vs_volume_at(v, i);
     return isfinite(x) ? (float)x : 0.0f;
 }
+/* The value less base, as splatted (non-finite values read as base). */
+static inline float vs_volume_density_above(const struct vs_volume *v, size_t i, double base)
+{
+    double x = vs_volume_at(v, i);
+    return isfinite(x) ? (float)(x - base) : 0.0f;
+}
 /* Central-difference gradient on the grid at voxel (i, j, k), linear index
  * idx, in index units (one-sided at the borders; non-finite results 0):
  * what the pre-shaded pipelines shade a voxel by. */
@@ -93,6 +99,14 @@ vs_status vs_volume_set_affine(vs_context *ctx, struct vs_volume *v, const doubl
  * Sets ctx error. */
 vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3],
                                 const double spacing[3], struct vs_volume **out);
+/* What sampled reconstructions read outside the volume (and for
+ * non-finite values): its minimum when that is below 0 (CT's air, -1000 HU
+ * or the scanner's padding), else 0; so the faces of a CT volume draw no
+ * surface at an iso-value between air and 0.  0 also for a constant
+ * volume (it would have no faces) and for ranges that float cannot hold
+ * shifted.  Post-classified splatting and the ray caster reconstruct the
+ * values less this and add it back. */
+double vs_volume_base(const struct vs_volume *v);
 /* A fresh serial: the caches keyed on the old one are rebuilt. */
 void vs_volume_new_serial(struct vs_volume *v);
 /* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
