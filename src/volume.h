@@ -58,8 +58,8 @@ static inline double vs_volume_at(const struct vs_volume *v, size_t i)
     default: return ((const float *)v->data)[i];
     }
 }
-/* What a splat is weighted by: the value at linear index i, non-finite
- * values read as 0 (empty space). */
+/* The value at linear index i, non-finite values read as 0 (what
+ * pre-shaded splatting classifies them as). */
 static inline float vs_volume_density(const struct vs_volume *v, size_t i)
 {
     double x = vs_volume_at(v, i);
