@@ -81,6 +81,18 @@ cp "$T/n3.exr" "$T/first.exr"
 mpi 3 --scene cell:256 --size 128x128 --view 30,70 --threads 1 --no-pin -q -o "$T/again.exr"
 line=$("$VSPLAT" compare "$T/first.exr" "$T/again.exr" 2>&1 || true)
 if [[ $line == *"max=0"* ]]; then ok; else bad "N=3 twice: not the same image: $line"; fi
+# the MPI reduction composites the same image as the default gather (rank 0
+# receiving every rectangle), up to float association
+mpi 3 --scene cell:256 --size 128x128 --view 30,70 --threads 1 --no-pin -q --composite reduce -o "$T/reduce.exr"
+line=$("$VSPLAT" compare "$T/first.exr" "$T/reduce.exr" 2>&1 || true)
+psnr=$(sed -n 's/.*psnr=\([^ ]*\).*/\1/p' <<<"$line")
+if [[ $rc -eq 0 ]] && awk -v p="$psnr" 'BEGIN { exit !(p == "inf" || p >= 100) }'; then ok; else
+    bad "N=3 --composite reduce against gather: exit $rc: $line"
+fi
+mpi 2 --scene cell:64 --composite tree -o "$T/x.png"
+if [[ $rc -eq 1 && $(grep -c '^vsplat-mpi:.*--composite' "$T/err") -eq 1 ]]; then ok; else
+    bad "--composite tree: exit $rc: $(head -c 600 "$T/err")"
+fi
 
 render_all "cell perspective pre" --scene cell:256 --size 128x128 --view 200,40 --perspective 50 --pipeline pre
 

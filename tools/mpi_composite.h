@@ -24,4 +24,15 @@ mpi_rect mpi_touched(const vs_image *img);
 int mpi_composite_gather(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
                          vs_image *out, uint64_t *bytes_sent);
 
+/* The same image by an MPI reduction: the ranks, renumbered front to back
+ * in `order`, reduce the union of their touched rectangles with a
+ * non-commutative "over" operator, which MPI may evaluate as a tree (Open
+ * MPI has an in-order binary tree for such operators: log N rounds, rank
+ * 0 receiving log N messages instead of N - 1), at the price of every
+ * rank sending the union rather than its own rectangle.  The result differs from the gather's only by
+ * float association (|over| is associative in exact arithmetic), and is
+ * the same run to run for a given N.  Same contract as the gather. */
+int mpi_composite_reduce(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
+                         vs_image *out, uint64_t *bytes_sent);
+
 #endif

@@ -3,8 +3,10 @@
  * Rank 0 reads the volume, splits it into N bricks (k-d, balanced by
  * relevant voxels) and sends each rank its brick with ghost layers; every
  * rank renders its brick with the ordinary pipelines, cropped to the voxels
- * it owns; rank 0 composites the partial images in visibility order and
- * writes.  N = 1 is `vsplat render` itself.
+ * it owns; the partial images are composited in visibility order (rank 0
+ * receiving them in turn, or with --composite reduce an MPI reduction with
+ * a non-commutative "over") and rank 0 writes.  N = 1 is `vsplat render`
+ * itself.
  *
  * Errors: every step that can fail ends in a status exchange (the lowest
  * failing rank's message goes to all), so all ranks exit with the same code
@@ -248,10 +250,31 @@ static int run(int rank, int n, int argc, char **argv)
     if (argc < 2 || strcmp(argv[1], "render") != 0) {
         if (rank == 0)
             fprintf(stderr, "vsplat-mpi: usage: mpirun -np N vsplat-mpi render INPUT|--scene NAME "
-                            "[vsplat render options] -o OUT\n");
+                            "[vsplat render options] [--composite gather|reduce] -o OUT\n");
         return EXIT_USAGE;
     }
-    if (cli_parse_render(argc - 2, argv + 2, &o, err, sizeof err)) {
+    /* --composite gather|reduce is vsplat-mpi's own option (default gather,
+     * the cheaper at the rank counts measured: docs/DISTRIBUTED.md), taken
+     * out before the render options are parsed */
+    int gather = 1, na = 0;
+    char **args = malloc(sizeof *args * (size_t)(argc > 2 ? argc - 2 : 1));
+    if (!args) return EXIT_INTERNAL;
+    for (int i = 2; i < argc; i++) {
+        if (strcmp(argv[i], "--composite") != 0) {
+            args[na++] = argv[i];
+            continue;
+        }
+        const char *m = i + 1 < argc ? argv[++i] : "";
+        if (strcmp(m, "reduce") != 0 && strcmp(m, "gather") != 0) {
+            if (rank == 0) fprintf(stderr, "vsplat-mpi: --composite: expected gather or reduce, got '%s'\n", m);
+            free(args);
+            return EXIT_USAGE;
+        }
+        gather = !strcmp(m, "gather");
+    }
+    const int bad_args = cli_parse_render(na, args, &o, err, sizeof err);
+    free(args);
+    if (bad_args) {
         if (rank == 0) fprintf(stderr, "vsplat-mpi: %s\n", err);
         return EXIT_USAGE;
     }
@@ -428,7 +451,8 @@ static int run(int rank, int n, int argc, char **argv)
     const double t_comp = MPI_Wtime();
     vs_image img = {0, 0, NULL};
     uint64_t bytes_sent = 0;
-    if (mpi_composite_gather(MPI_COMM_WORLD, &part, order, o.s.background, &img, &bytes_sent))
+    if ((gather ? mpi_composite_gather : mpi_composite_reduce)(MPI_COMM_WORLD, &part, order, o.s.background, &img,
+                                                               &bytes_sent))
         fail(&sp, EXIT_INTERNAL, "compositing: out of memory%s", "", NULL);
     const double ms_comp = 1e3 * (MPI_Wtime() - t_comp);
     free(order);
