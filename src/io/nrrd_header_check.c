@@ -4,7 +4,7 @@
  * caller can reach it.  Each case is a header that Teem refuses anyway, so
  * refusing it first loses no valid file:
  *  - "centers"/"centerings", "kinds", or a "data file" given as a %d
- *    template or LIST before "dimension" (Teem's per-field mop is leaked
+ *    template, LIST or SKIPLIST before "dimension" (Teem's per-field mop is leaked
  *    when it finds it has no dimension yet; the NRRD spec puts dimension
  *    before every per-axis field);
  *  - "labels", "units" or "space units" with an unterminated quoted string
@@ -86,7 +86,8 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
     } else if (!strcmp(name, "space")) {
         *sdim = space_dim(info);
     } else if (!*dim && (!strcmp(name, "centers") || !strcmp(name, "centerings") || !strcmp(name, "kinds") ||
-                              (!strcmp(name, "datafile") && (strchr(info, '%') || !strncmp(info, "LIST", 4))))) {
+                              (!strcmp(name, "datafile") &&
+                               (strchr(info, '%') || !strncmp(info, "LIST", 4) || !strncmp(info, "SKIPLIST", 8))))) {
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path,
                             spelled(name));
     }
