@@ -58,19 +58,15 @@ static inline double vs_volume_at(const struct vs_volume *v, size_t i)
     default: return ((const float *)v->data)[i];
     }
 }
-/* The value at linear index i, non-finite values read as 0 (what
- * pre-shaded splatting classifies them as). */
-static inline float vs_volume_density(const struct vs_volume *v, size_t i)
-{
-    double x = vs_volume_at(v, i);
-    return isfinite(x) ? (float)x : 0.0f;
-}
 /* The value less base, as splatted (non-finite values read as base). */
 static inline float vs_volume_density_above(const struct vs_volume *v, size_t i, double base)
 {
     double x = vs_volume_at(v, i);
     return isfinite(x) ? (float)(x - base) : 0.0f;
 }
+/* The value at linear index i, non-finite values read as 0 (what
+ * pre-shaded splatting classifies them as). */
+static inline float vs_volume_density(const struct vs_volume *v, size_t i) { return vs_volume_density_above(v, i, 0.0); }
 /* Central-difference gradient on the grid at voxel (i, j, k), linear index
  * idx, in index units (one-sided at the borders; non-finite results 0):
  * what the pre-shaded pipelines shade a voxel by. */
