@@ -322,6 +322,18 @@ VS_API void vs_load_options_init_sized(vs_load_options *o, size_t struct_size);
  * (VolPack), raw (+gzip). */
 VS_API vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
                                 vs_volume **out);
+/* Part of a volume file, for programs that split a volume too big for one
+ * process (vsplat-mpi: each rank reads its brick).  vs_volume_file_dims:
+ * the file's dimensions from its header.  vs_volume_load_box: only the
+ * voxels lo[a] <= i < hi[a] of each axis, as vs_volume_load gives them
+ * (type, spacing, options), the transform moved to the box's first voxel,
+ * the value range the box's own.  Raw (+gzip) and NIfTI (.nii, .nii.gz,
+ * .hdr/.img): a compressed file is decompressed up to the box's end, never
+ * held whole.  Other formats: VS_ERR_UNSUPPORTED (load them whole); a box
+ * empty or outside the volume: VS_ERR_INVALID_ARGUMENT. */
+VS_API vs_status vs_volume_file_dims(vs_context *ctx, const char *path, const vs_load_options *opt, int dims[3]);
+VS_API vs_status vs_volume_load_box(vs_context *ctx, const char *path, const vs_load_options *opt, const int lo[3],
+                                    const int hi[3], vs_volume **out);
 /* Synthetic scenes: cube, sphere, ml[:N], head, cell (optionally NAME:N). */
 VS_API vs_status vs_volume_scene(vs_context *ctx, const char *spec, vs_volume **out);
 VS_API vs_status vs_volume_create(vs_context *ctx, vs_type type, const int dims[3],
@@ -367,6 +379,13 @@ VS_API vs_status vs_volume_set_range(vs_volume *v, double lo, double hi);
 VS_API void vs_volume_range(const vs_volume *v, double *lo, double *hi);
 /* Otsu threshold of the value histogram: a default iso-value. */
 VS_API double vs_volume_default_iso(const vs_volume *v);
+/* The histogram behind it, for a volume split into bricks: each brick,
+ * given the whole range (vs_volume_set_range), adds its finite values'
+ * counts in VS_HISTOGRAM_BINS bins over that range into hist; on the sum,
+ * vs_histogram_iso(hist, lo, hi) is the whole volume's default iso. */
+#define VS_HISTOGRAM_BINS 256
+VS_API void vs_volume_histogram(const vs_volume *v, double hist[VS_HISTOGRAM_BINS]);
+VS_API double vs_histogram_iso(const double hist[VS_HISTOGRAM_BINS], double lo, double hi);
 VS_API int vs_volume_has_analytic(const vs_volume *v);
 
 /* Where the camera of these settings looks from, in the volume's index

@@ -190,21 +190,26 @@ double vs_volume_base(const struct vs_volume *v)
 
 void vs_volume_new_serial(struct vs_volume *v) { v->serial = atomic_fetch_add(&volume_serial, 1) + 1; }
 
-double vs_volume_default_iso(const vs_volume *v)
+void vs_volume_histogram(const vs_volume *v, double hist[VS_HISTOGRAM_BINS])
 {
-    if (!v) return 0.0;
-    if (isfinite(v->default_iso)) return v->default_iso;
-    enum { BINS = 256 };
-    double hist[BINS] = {0};
-    double lo = v->vmin, hi = v->vmax;
-    if (!(hi > lo)) return lo;
-    size_t n = (size_t)v->dims[0] * v->dims[1] * v->dims[2];
-    double scale = (BINS - 1) / (hi - lo);
+    if (!v || !hist) return;
+    const double lo = v->vmin, hi = v->vmax;
+    const size_t n = (size_t)v->dims[0] * v->dims[1] * v->dims[2];
+    const double scale = hi > lo ? (VS_HISTOGRAM_BINS - 1) / (hi - lo) : 0.0;
     for (size_t i = 0; i < n; i++) {
         double x = vs_volume_at(v, i);
         if (!isfinite(x)) continue;
-        hist[(int)((x - lo) * scale)] += 1.0;
+        /* clamped: a declared range may be narrower than the data */
+        double b = (x - lo) * scale;
+        hist[b < 0.0 ? 0 : b > VS_HISTOGRAM_BINS - 1 ? VS_HISTOGRAM_BINS - 1 : (int)b] += 1.0;
     }
+}
+
+double vs_histogram_iso(const double hist[VS_HISTOGRAM_BINS], double lo, double hi)
+{
+    enum { BINS = VS_HISTOGRAM_BINS };
+    if (!hist || !(hi > lo)) return lo;
+    const double scale = (BINS - 1) / (hi - lo);
     /* Otsu: maximise between-class variance. */
     double total = 0, sum = 0;
     for (int i = 0; i < BINS; i++) {
@@ -226,4 +231,14 @@ double vs_volume_default_iso(const vs_volume *v)
         }
     }
     return lo + (best_t + 0.5) / scale;
+}
+
+double vs_volume_default_iso(const vs_volume *v)
+{
+    if (!v) return 0.0;
+    if (isfinite(v->default_iso)) return v->default_iso;
+    if (!(v->vmax > v->vmin)) return v->vmin;
+    double hist[VS_HISTOGRAM_BINS] = {0};
+    vs_volume_histogram(v, hist);
+    return vs_histogram_iso(hist, v->vmin, v->vmax);
 }

@@ -394,6 +394,178 @@ static void test_raw_den(vs_context *ctx)
     vs_volume_release(v);
 }
 
+/* ---- part of a file (vs_volume_load_box) ---- */
+
+/* The box of `whole` a box read must equal voxel for voxel, with the
+ * whole's type and spacing, its transform moved to lo, its own range. */
+static void check_box(vs_context *ctx, const char *path, const vs_load_options *o, const vs_volume *whole,
+                      const int lo[3], const int hi[3])
+{
+    vs_volume *b = NULL;
+    vs_status st = vs_volume_load_box(ctx, path, o, lo, hi, &b);
+    CHECK(st == VS_OK && b, "%s box %d-%d,%d-%d,%d-%d: %s", path, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2],
+          vs_last_error(ctx));
+    if (!b) return;
+    int wd[3], bd[3];
+    vs_volume_dims(whole, wd);
+    vs_volume_dims(b, bd);
+    const size_t elem = vs_type_size(vs_volume_type(whole));
+    CHECK(vs_volume_type(b) == vs_volume_type(whole), "%s box: type", path);
+    CHECK(bd[0] == hi[0] - lo[0] && bd[1] == hi[1] - lo[1] && bd[2] == hi[2] - lo[2], "%s box: dims %dx%dx%d", path,
+          bd[0], bd[1], bd[2]);
+    int bad = 0;
+    double mn = INFINITY, mx = -INFINITY;
+    for (int k = lo[2]; k < hi[2]; k++)
+        for (int j = lo[1]; j < hi[1]; j++)
+            for (int i = lo[0]; i < hi[0]; i++) {
+                const size_t w = ((size_t)k * wd[1] + j) * wd[0] + i;
+                const size_t x = ((size_t)(k - lo[2]) * bd[1] + (j - lo[1])) * bd[0] + (i - lo[0]);
+                bad += memcmp((const char *)vs_volume_data((vs_volume *)whole) + w * elem,
+                              (const char *)vs_volume_data(b) + x * elem, elem) != 0;
+                const double v = vs_volume_at(whole, w);
+                if (v < mn) mn = v;
+                if (v > mx) mx = v;
+            }
+    CHECK(bad == 0, "%s box %d-%d,%d-%d,%d-%d: %d voxels differ", path, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2],
+          bad);
+    double blo, bhi;
+    vs_volume_range(b, &blo, &bhi);
+    CHECK(blo == mn && bhi == mx, "%s box: range %g..%g, the box holds %g..%g", path, blo, bhi, mn, mx);
+    double mw[12], mb[12];
+    const int ow = vs_volume_affine(whole, mw), ob = vs_volume_affine(b, mb);
+    CHECK(ow == ob, "%s box: oriented %d, the whole %d", path, ob, ow);
+    for (int r = 0; r < 3; r++) {
+        double t = mw[4 * r + 3];
+        if (ow)
+            for (int a = 0; a < 3; a++) t += mw[4 * r + a] * lo[a];
+        CHECK(fabs(mb[4 * r + 3] - t) < 1e-9, "%s box: translation %d is %g, expected %g", path, r, mb[4 * r + 3], t);
+        for (int a = 0; a < 3; a++)
+            CHECK(mb[4 * r + a] == mw[4 * r + a], "%s box: transform column %d differs", path, a);
+    }
+    vs_volume_release(b);
+}
+
+static void test_box(vs_context *ctx)
+{
+    enum { BX = 13, BY = 11, BZ = 9, BN = BX * BY * BZ };
+    char path[1100];
+    int16_t v16[BN];
+    for (int i = 0; i < BN; i++) v16[i] = (int16_t)((i * 7919) % 3001 - 1200);
+    const int dims[4] = {BX, BY, BZ, 1};
+    const float sp[3] = {0.8f, 0.9f, 2.5f};
+    /* an oblique sform: the box's translation must move along its columns */
+    path_of(path, sizeof path, "box.nii");
+    write_nifti(path, 3, dims, DT_I16, 16, sp, 0.0f, 0.0f, v16, sizeof v16);
+    {
+        FILE *f = fopen(path, "r+b");
+        const int16_t code = 1;
+        const float srow[12] = {0.0f, 0.9f, 0.0f, -20.0f, -0.8f, 0.0f, 0.0f, 15.0f, 0.0f, 0.0f, 2.5f, 7.0f};
+        if (!f || fseek(f, 254, SEEK_SET) || fwrite(&code, 2, 1, f) != 1 || fseek(f, 280, SEEK_SET) ||
+            fwrite(srow, 4, 12, f) != 12 || fclose(f))
+            exit(1);
+    }
+    char gzpath[1100], rawpath[1100], rawgz[1100];
+    path_of(gzpath, sizeof gzpath, "box.nii.gz");
+    {
+        FILE *f = fopen(path, "rb");
+        unsigned char all[352 + sizeof v16];
+        if (!f || fread(all, 1, sizeof all, f) != sizeof all) exit(1);
+        fclose(f);
+        write_gz(gzpath, all, sizeof all);
+    }
+    path_of(rawpath, sizeof rawpath, "box_13x11x9_i16le.raw");
+    tu_write_file(rawpath, v16, sizeof v16);
+    path_of(rawgz, sizeof rawgz, "box_13x11x9_i16le.raw.gz");
+    write_gz(rawgz, v16, sizeof v16);
+    const int boxes[][6] = {
+        {0, 13, 0, 11, 0, 9}, /* all of it               */
+        {2, 9, 3, 4, 1, 8},   /* rows                    */
+        {0, 13, 2, 7, 3, 9},  /* x spanned: slice runs   */
+        {12, 13, 10, 11, 8, 9}, /* the last voxel        */
+        {0, 13, 0, 11, 4, 5}, /* one slice               */
+    };
+    vs_load_options spaced;
+    vs_load_options_init(&spaced);
+    spaced.has_spacing = 1;
+    spaced.spacing[0] = 0.5;
+    spaced.spacing[1] = 0.25;
+    spaced.spacing[2] = 3.0;
+    const char *files[] = {path, gzpath, rawpath, rawgz};
+    for (int f = 0; f < 4; f++)
+        for (int opt = 0; opt < 2; opt++) {
+            const vs_load_options *o = opt ? &spaced : NULL;
+            vs_volume *whole = load(ctx, files[f], o);
+            if (!whole) continue;
+            CHECK(vs_volume_affine(whole, (double[12]){0}) == (f < 2), "%s: oriented", files[f]);
+            int fd[3] = {0, 0, 0};
+            CHECK(vs_volume_file_dims(ctx, files[f], o, fd) == VS_OK && fd[0] == BX && fd[1] == BY && fd[2] == BZ,
+                  "%s: file dims %dx%dx%d: %s", files[f], fd[0], fd[1], fd[2], vs_last_error(ctx));
+            for (size_t b = 0; b < sizeof boxes / sizeof boxes[0]; b++) {
+                const int lo[3] = {boxes[b][0], boxes[b][2], boxes[b][4]}, hi[3] = {boxes[b][1], boxes[b][3], boxes[b][5]};
+                check_box(ctx, files[f], o, whole, lo, hi);
+            }
+            vs_volume_release(whole);
+        }
+
+    /* errors: a box outside or empty; a format read whole; a short file */
+    vs_volume *b = NULL;
+    const int lo[3] = {0, 0, 0}, out[3] = {BX, BY, BZ + 1}, empty[3] = {BX, 0, BZ};
+    CHECK(vs_volume_load_box(ctx, path, NULL, lo, out, &b) == VS_ERR_INVALID_ARGUMENT && !b &&
+              strstr(vs_last_error(ctx), "outside"),
+          "box past the end: %s", vs_last_error(ctx));
+    CHECK(vs_volume_load_box(ctx, rawpath, NULL, lo, empty, &b) == VS_ERR_INVALID_ARGUMENT && !b,
+          "empty box: %s", vs_last_error(ctx));
+    char nrrd[1100];
+    path_of(nrrd, sizeof nrrd, "box.nhdr");
+    const char hdr[] = "NRRD0004\ntype: int16\nendian: little\ndimension: 3\nsizes: 13 11 9\nencoding: raw\n"
+                       "data file: box_13x11x9_i16le.raw\n";
+    tu_write_file(nrrd, hdr, sizeof hdr - 1);
+    int fd[3];
+    CHECK(vs_volume_file_dims(ctx, nrrd, NULL, fd) == VS_ERR_UNSUPPORTED &&
+              strstr(vs_last_error(ctx), "raw and NIfTI"),
+          "NRRD in part: %s", vs_last_error(ctx));
+    CHECK(vs_volume_load_box(ctx, nrrd, NULL, lo, out, &b) == VS_ERR_UNSUPPORTED && !b, "NRRD box");
+    char cut[1100];
+    path_of(cut, sizeof cut, "box_cut.nii.gz");
+    {
+        FILE *f = fopen(path, "rb");
+        unsigned char all[352 + sizeof v16 / 2];
+        if (!f || fread(all, 1, sizeof all, f) != sizeof all) exit(1);
+        fclose(f);
+        write_gz(cut, all, sizeof all);
+    }
+    const int first[3] = {BX, BY, 2}, tail_lo[3] = {0, 0, 6};
+    CHECK(vs_volume_load_box(ctx, cut, NULL, lo, first, &b) == VS_OK && b, "cut .nii.gz, its first slices: %s",
+          vs_last_error(ctx));
+    vs_volume_release(b);
+    b = NULL;
+    CHECK(vs_volume_load_box(ctx, cut, NULL, tail_lo, dims, &b) == VS_ERR_FORMAT && !b &&
+              strstr(vs_last_error(ctx), "truncated"),
+          "cut .nii.gz, its last slices: %s", vs_last_error(ctx));
+
+    /* the default iso from the bricks' histograms is the whole volume's */
+    vs_volume *whole = load(ctx, rawpath, NULL);
+    if (whole) {
+        double wlo, whi, hist[VS_HISTOGRAM_BINS] = {0};
+        vs_volume_range(whole, &wlo, &whi);
+        for (int z = 0; z < BZ; z += 4) {
+            const int l[3] = {0, 0, z}, h[3] = {BX, BY, z + 4 < BZ ? z + 4 : BZ};
+            vs_volume *part = NULL;
+            if (vs_volume_load_box(ctx, rawpath, NULL, l, h, &part) != VS_OK) continue;
+            vs_volume_set_range(part, wlo, whi);
+            vs_volume_histogram(part, hist);
+            vs_volume_release(part);
+        }
+        const double iso = vs_histogram_iso(hist, wlo, whi), want = vs_volume_default_iso(whole);
+        CHECK(iso == want, "iso from the parts' histograms %.17g, the whole volume's %.17g", iso, want);
+        /* a declared range narrower than the data must not index past the bins */
+        vs_volume_set_range(whole, 0.0, 10.0);
+        const double narrow = vs_volume_default_iso(whole);
+        CHECK(narrow >= 0.0 && narrow <= 10.0, "narrow range: iso %g", narrow);
+        vs_volume_release(whole);
+    }
+}
+
 /* Minimal ustar writer for the tests (the loader parses these). */
 static size_t tar_add(unsigned char *out, const char *name, const unsigned char *data, size_t n)
 {
@@ -740,6 +912,7 @@ int main(void)
     test_nifti(ctx);
     test_nrrd(ctx);
     test_raw_den(ctx);
+    test_box(ctx);
     test_stacks(ctx);
     test_hostile(ctx);
     tu_remove_tmpdir(tmp);

@@ -93,11 +93,11 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
         return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     if (S_ISDIR(st.st_mode))
         return vs_dicom_folder(path) ? vs_load_dicom(ctx, path, opt->series, out) : vs_load_folder(ctx, path, out);
-    if (opt->raw) return vs_load_raw(ctx, path, opt->dims, opt->type, opt->endian, out);
+    if (opt->raw) return vs_load_raw(ctx, path, opt->dims, opt->type, opt->endian, NULL, out);
 
     static const char *const nifti[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz"};
     for (size_t i = 0; i < sizeof nifti / sizeof nifti[0]; i++)
-        if (vs_load_ends_with(path, nifti[i])) return vs_load_nifti(ctx, path, out);
+        if (vs_load_ends_with(path, nifti[i])) return vs_load_nifti(ctx, path, NULL, out);
     if (vs_load_ends_with(path, ".nrrd") || vs_load_ends_with(path, ".nhdr"))
         return vs_load_nrrd(ctx, path, out);
     if (vs_load_ends_with(path, ".den")) return vs_load_den(ctx, path, out);
@@ -117,7 +117,7 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
                                 "%s: headerless raw file: give its dimensions and voxel type "
                                 "(raw options), or name it like NAME_XxYxZ_u8.raw",
                                 path);
-        return vs_load_raw(ctx, path, dims, type, endian, out);
+        return vs_load_raw(ctx, path, dims, type, endian, NULL, out);
     }
     /* scanners name DICOM files anything (or nothing): known by content */
     if (vs_dicom_sniff(path)) return vs_load_dicom(ctx, path, opt->series, out);
@@ -128,37 +128,114 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
                         path);
 }
 
-vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
-                         vs_volume **out)
+/* The formats that can be read in part: raw and NIfTI, whose voxels lie
+ * at a known offset in one (maybe gzip'd) file. */
+static vs_status dispatch_box(vs_context *ctx, const char *path, const vs_load_options *opt, vs_load_box *box,
+                              vs_volume **out)
 {
-    if (out) *out = NULL;
-    if (!path || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: NULL argument");
-    if (!*path) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: empty file name");
-    /* the caller's layout into the library's own (src/abi.c) */
-    vs_load_options full;
-    vs_load_options_init(&full);
-    vs_status rc = vs_load_options_import(ctx, opt, &full);
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (opt->raw) return vs_load_raw(ctx, path, opt->dims, opt->type, opt->endian, box, out);
+    static const char *const nifti[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz"};
+    for (size_t i = 0; i < sizeof nifti / sizeof nifti[0]; i++)
+        if (vs_load_ends_with(path, nifti[i])) return vs_load_nifti(ctx, path, box, out);
+    int dims[3];
+    vs_type type;
+    vs_endian endian;
+    if (!S_ISDIR(st.st_mode) && is_raw_name(path) && parse_name_dims(path, dims, &type, &endian))
+        return vs_load_raw(ctx, path, dims, type, endian, box, out);
+    return vs_set_error(ctx, VS_ERR_UNSUPPORTED,
+                        "%s: only raw and NIfTI files can be read in part (load the whole volume)", path);
+}
+
+/* The caller's options in the library's layout (src/abi.c), checked. */
+static vs_status import_options(vs_context *ctx, const char *path, const vs_load_options *opt,
+                                vs_load_options *full)
+{
+    vs_load_options_init(full);
+    vs_status rc = vs_load_options_import(ctx, opt, full);
     if (rc != VS_OK) return rc;
-    opt = &full;
-    if (opt->has_spacing)
+    if (full->has_spacing)
         for (int a = 0; a < 3; a++)
-            if (!(opt->spacing[a] > 0.0) || !isfinite(opt->spacing[a]) || opt->spacing[a] > 1e12 ||
-                opt->spacing[a] < 1e-12)
+            if (!(full->spacing[a] > 0.0) || !isfinite(full->spacing[a]) || full->spacing[a] > 1e12 ||
+                full->spacing[a] < 1e-12)
                 return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
                                     "%s: spacing override %d is %g (must be finite and > 0)", path,
-                                    a, opt->spacing[a]);
-    vs_volume *v = NULL;
-    vs_status st = dispatch(ctx, path, opt, &v);
-    if (st != VS_OK) {
-        vs_volume_release(v);
-        return st;
-    }
+                                    a, full->spacing[a]);
+    return VS_OK;
+}
+
+/* What every read ends with: the spacing override, the value range. */
+static void finish(const vs_load_options *opt, vs_volume *v)
+{
     if (opt->has_spacing)
         for (int a = 0; a < 3; a++) { /* the transform keeps its directions */
             for (int r = 0; r < 3; r++) v->affine[r][a] *= opt->spacing[a] / v->spacing[a];
             v->spacing[a] = opt->spacing[a];
         }
     vs_volume_update_range(v);
+}
+
+vs_status vs_volume_file_dims(vs_context *ctx, const char *path, const vs_load_options *opt, int dims[3])
+{
+    if (!path || !dims) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "file dims: NULL argument");
+    vs_load_options full;
+    vs_status rc = import_options(ctx, path, opt, &full);
+    if (rc != VS_OK) return rc;
+    vs_load_box box;
+    memset(&box, 0, sizeof box);
+    box.dims_only = 1;
+    vs_volume *v = NULL;
+    rc = dispatch_box(ctx, path, &full, &box, &v);
+    vs_volume_release(v);
+    if (rc == VS_OK) memcpy(dims, box.dims, sizeof box.dims);
+    return rc;
+}
+
+vs_status vs_volume_load_box(vs_context *ctx, const char *path, const vs_load_options *opt, const int lo[3],
+                             const int hi[3], vs_volume **out)
+{
+    if (out) *out = NULL;
+    if (!path || !lo || !hi || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load box: NULL argument");
+    vs_load_options full;
+    vs_status rc = import_options(ctx, path, opt, &full);
+    if (rc != VS_OK) return rc;
+    vs_load_box box;
+    memset(&box, 0, sizeof box);
+    memcpy(box.lo, lo, sizeof box.lo);
+    memcpy(box.hi, hi, sizeof box.hi);
+    vs_volume *v = NULL;
+    rc = dispatch_box(ctx, path, &full, &box, &v);
+    if (rc != VS_OK) {
+        vs_volume_release(v);
+        return rc;
+    }
+    finish(&full, v);
+    /* the box lies where it lies in the file: its first voxel's place */
+    if (v->has_orientation)
+        for (int r = 0; r < 3; r++)
+            for (int a = 0; a < 3; a++) v->affine[r][3] += v->affine[r][a] * lo[a];
+    *out = v;
+    return VS_OK;
+}
+
+vs_status vs_volume_load(vs_context *ctx, const char *path, const vs_load_options *opt,
+                         vs_volume **out)
+{
+    if (out) *out = NULL;
+    if (!path || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: NULL argument");
+    if (!*path) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "load: empty file name");
+    vs_load_options full;
+    vs_status rc = import_options(ctx, path, opt, &full);
+    if (rc != VS_OK) return rc;
+    vs_volume *v = NULL;
+    vs_status st = dispatch(ctx, path, &full, &v);
+    if (st != VS_OK) {
+        vs_volume_release(v);
+        return st;
+    }
+    finish(&full, v);
     *out = v;
     return VS_OK;
 }

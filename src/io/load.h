@@ -5,14 +5,17 @@
 #ifndef VS_LOAD_H
 #define VS_LOAD_H
 
+#include "load_common.h"
 #include "volume.h"
 #include <stdint.h>
 
-vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out);
+/* box (NULL: the whole volume): read only its part, or only the dims
+ * (load_common.h); the two formats that can be read in part. */
+vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_load_box *box, vs_volume **out);
 vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out);
 vs_status vs_load_den(vs_context *ctx, const char *path, vs_volume **out);
 vs_status vs_load_raw(vs_context *ctx, const char *path, const int dims[3], vs_type type,
-                      vs_endian endian, vs_volume **out);
+                      vs_endian endian, vs_load_box *box, vs_volume **out);
 /* Any single image file read by OpenImageIO; its pages are the z slices. */
 vs_status vs_load_image_pages(vs_context *ctx, const char *path, vs_volume **out);
 /* A folder of PNG/TIFF slices, in natural numeric order of the names. */

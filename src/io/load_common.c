@@ -5,8 +5,11 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
 
 vs_status vs_load_file_size(vs_context *ctx, const char *path, uint64_t *size)
 {
@@ -65,3 +68,74 @@ vs_status vs_load_alloc(vs_context *ctx, const char *path, vs_type type, const i
     return st;
 }
 
+
+vs_status vs_load_check_box(vs_context *ctx, const char *path, const vs_load_box *box, const int dims[3])
+{
+    for (int a = 0; a < 3; a++)
+        if (box->lo[a] < 0 || box->hi[a] > dims[a] || box->lo[a] >= box->hi[a])
+            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
+                                "%s: box %d-%d,%d-%d,%d-%d is empty or outside the volume's %dx%dx%d voxels", path,
+                                box->lo[0], box->hi[0], box->lo[1], box->hi[1], box->lo[2], box->hi[2], dims[0],
+                                dims[1], dims[2]);
+    return VS_OK;
+}
+
+vs_status vs_load_read_box(vs_context *ctx, const char *path, const char *file, uint64_t offset,
+                           const int dims[3], size_t elem, const vs_load_box *box, void *dst)
+{
+    gzFile gz = gzopen(file, "rb");
+    if (!gz) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", file, strerror(errno));
+    gzbuffer(gz, 1 << 18);
+    /* an uncompressed file is read with pread: zlib would refill its whole
+     * buffer for every row */
+    int fd = -1;
+    if (gzdirect(gz)) {
+        gzclose(gz);
+        gz = NULL;
+        if ((fd = open(file, O_RDONLY)) < 0)
+            return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", file, strerror(errno));
+    }
+    const int *lo = box->lo, *hi = box->hi;
+    /* the longest runs that are contiguous in the file: rows, or whole
+     * slices when the box spans x, or everything when it spans x and y */
+    uint64_t run = (uint64_t)(hi[0] - lo[0]) * elem;
+    int rows = hi[1] - lo[1], per_slice = 1;
+    if (lo[0] == 0 && hi[0] == dims[0]) {
+        run *= (uint64_t)rows;
+        per_slice = 0;
+    }
+    unsigned char *p = dst;
+    vs_status st = VS_OK;
+    for (int k = lo[2]; k < hi[2] && st == VS_OK; k++)
+        for (int j = lo[1]; j < (per_slice ? hi[1] : lo[1] + 1) && st == VS_OK; j++) {
+            const uint64_t at = offset + (((uint64_t)k * (uint64_t)dims[1] + (uint64_t)j) * (uint64_t)dims[0] +
+                                          (uint64_t)lo[0]) * elem;
+            uint64_t got = 0;
+            if (fd >= 0)
+                while (got < run) {
+                    ssize_t r = pread(fd, p + got, (size_t)(run - got), (off_t)(at + got));
+                    if (r <= 0) break;
+                    got += (uint64_t)r;
+                }
+            else if (gzseek(gz, (z_off_t)at, SEEK_SET) == (z_off_t)at)
+                while (got < run) {
+                    uint64_t left = run - got;
+                    unsigned piece = left > (1u << 26) ? (1u << 26) : (unsigned)left;
+                    int r = gzread(gz, p + got, piece);
+                    if (r <= 0) break;
+                    got += (uint64_t)r;
+                }
+            if (got < run) {
+                int zerr = Z_OK;
+                const char *msg = gz ? gzerror(gz, &zerr) : "";
+                const int bad = zerr != Z_OK && zerr != Z_BUF_ERROR;
+                st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: truncated: no %llu bytes of voxel data at offset %llu%s%s%s",
+                                  path, (unsigned long long)run, (unsigned long long)at, bad ? " (gzip: " : "",
+                                  bad ? msg : "", bad ? ")" : "");
+            }
+            p += run;
+        }
+    if (gz) gzclose(gz);
+    else close(fd);
+    return st;
+}

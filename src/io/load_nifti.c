@@ -189,7 +189,7 @@ static void set_orientation(vs_volume *v, const nifti_image *nim)
     if (nim->qform_code > 0) try_affine(v, &nim->qto_xyz);
 }
 
-vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
+vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_load_box *box, vs_volume **out)
 {
     uint64_t fsize;
     vs_status st = vs_load_file_size(ctx, path, &fsize);
@@ -261,6 +261,17 @@ vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
         }
     }
 
+    if (box) {
+        memcpy(box->dims, dims, sizeof box->dims);
+        if (box->dims_only) goto done; /* st is VS_OK */
+        if ((st = vs_load_check_box(ctx, path, box, dims)) != VS_OK) goto done;
+    }
+    const int whole[3] = {dims[0], dims[1], dims[2]};
+    if (box) {
+        for (int a = 0; a < 3; a++) dims[a] = box->hi[a] - box->lo[a];
+        need = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * (uint64_t)nim->nbyper;
+    }
+
     double slope = nim->scl_slope, inter = isfinite(nim->scl_inter) ? nim->scl_inter : 0.0;
     int scale = isfinite(slope) && slope != 0.0 && !(slope == 1.0 && inter == 0.0);
     vs_type type;
@@ -275,7 +286,8 @@ vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
     st = vs_load_alloc(ctx, path, type, dims, spacing, &v);
     if (st != VS_OK) goto done;
 
-    /* The first volume is the first `need` bytes (x, y, z vary fastest). */
+    /* The first volume is the first `need` bytes (x, y, z vary fastest);
+     * a box is read row by row from it. */
     if (!direct) {
         tmp = malloc((size_t)need);
         if (!tmp) {
@@ -283,7 +295,8 @@ vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_volume **out)
             goto done;
         }
     }
-    st = read_voxels(ctx, path, nim->iname, offset, need, direct ? v->data : tmp);
+    st = box ? vs_load_read_box(ctx, path, nim->iname, offset, whole, (size_t)nim->nbyper, box, direct ? v->data : tmp)
+             : read_voxels(ctx, path, nim->iname, offset, need, direct ? v->data : tmp);
     if (st != VS_OK) goto done;
     if (nim->swapsize > 1 && nim->byteorder != nifti_short_order())
         swap_bytes(direct ? v->data : tmp, (size_t)(need / (uint64_t)nim->swapsize), nim->swapsize);

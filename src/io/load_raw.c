@@ -104,7 +104,7 @@ static vs_status read_gz(vs_context *ctx, const char *path, uint64_t need, void 
 }
 
 vs_status vs_load_raw(vs_context *ctx, const char *path, const int dims[3], vs_type type,
-                      vs_endian endian, vs_volume **out)
+                      vs_endian endian, vs_load_box *box, vs_volume **out)
 {
     size_t elem = vs_type_size(type);
     if (elem == 0)
@@ -141,10 +141,19 @@ vs_status vs_load_raw(vs_context *ctx, const char *path, const int dims[3], vs_t
     if (!gz && fsize > need) return read_plain(ctx, path, fsize, need, NULL);
 
     int idims[3] = {dims[0], dims[1], dims[2]};
+    if (box) {
+        memcpy(box->dims, idims, sizeof box->dims);
+        if (box->dims_only) return VS_OK;
+        if ((st = vs_load_check_box(ctx, path, box, idims)) != VS_OK) return st;
+        for (int a = 0; a < 3; a++) idims[a] = box->hi[a] - box->lo[a];
+        need = (uint64_t)idims[0] * (uint64_t)idims[1] * (uint64_t)idims[2] * elem;
+    }
     vs_volume *v;
     st = vs_load_alloc(ctx, path, type, idims, NULL, &v);
     if (st != VS_OK) return st;
-    st = gz ? read_gz(ctx, path, need, v->data) : read_plain(ctx, path, fsize, need, v->data);
+    st = box  ? vs_load_read_box(ctx, path, path, 0, dims, elem, box, v->data)
+         : gz ? read_gz(ctx, path, need, v->data)
+              : read_plain(ctx, path, fsize, need, v->data);
     if (st != VS_OK) {
         vs_volume_release(v);
         return st;
