@@ -1,5 +1,6 @@
 /* vsplat-mpi: compositing of premultiplied partial images, by a
- * depth-ordered gather at rank 0 or by a non-commutative MPI reduction. */
+ * depth-ordered gather at rank 0, by a non-commutative MPI reduction, or by
+ * binary swap. */
 #include "mpi_composite.h"
 
 #include <stdlib.h>
@@ -49,7 +50,7 @@ static void under(float *acc, int width, const mpi_rect *r, const float *src)
         }
 }
 
-static void finish(float *acc, size_t np, const float background[4]);
+static void finish(float *acc, const vs_image *partial, const float background[4], vs_image *out);
 
 int mpi_composite_gather(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
                          vs_image *out, uint64_t *bytes_sent)
@@ -101,18 +102,17 @@ int mpi_composite_gather(MPI_Comm comm, const vs_image *partial, const int *orde
             MPI_Recv(buf, (int)rect_floats(&rects[r]), MPI_FLOAT, r, 1, comm, MPI_STATUS_IGNORE);
         under(acc, partial->width, &rects[r], buf);
     }
-    finish(acc, (size_t)partial->width * partial->height, background);
-    out->width = partial->width;
-    out->height = partial->height;
-    out->rgba = acc;
+    finish(acc, partial, background, out);
     free(buf);
     free(rects);
     return 0;
 }
 
-/* The background under what is left, stored straight (as vs_finish_pixel). */
-static void finish(float *acc, size_t np, const float background[4])
+/* The background under what is left, stored straight (as vs_finish_pixel),
+ * as the image *out. */
+static void finish(float *acc, const vs_image *partial, const float background[4], vs_image *out)
 {
+    const size_t np = (size_t)partial->width * partial->height;
     for (size_t p = 0; p < np; p++) {
         float *d = acc + 4 * p;
         float t = 1.0f - d[3];
@@ -123,6 +123,21 @@ static void finish(float *acc, size_t np, const float background[4])
         }
         d[3] = a;
     }
+    out->width = partial->width;
+    out->height = partial->height;
+    out->rgba = acc;
+}
+
+/* The union of all ranks' touched rectangles (an empty one adds nothing). */
+static mpi_rect union_rect(MPI_Comm comm, const vs_image *partial)
+{
+    const mpi_rect mine = mpi_touched(partial);
+    const int empty = mine.x1 == mine.x0;
+    int b[4] = {empty ? -partial->width : -mine.x0, empty ? -partial->height : -mine.y0, mine.x1, mine.y1}, u[4];
+    MPI_Allreduce(b, u, 4, MPI_INT, MPI_MAX, comm);
+    mpi_rect all = {-u[0], -u[1], u[2], u[3]};
+    if (all.x1 <= all.x0 || all.y1 <= all.y0) all = (mpi_rect){0, 0, 0, 0};
+    return all;
 }
 
 /* inout = in over inout, pixel by pixel: MPI passes the operand of the
@@ -145,13 +160,7 @@ int mpi_composite_reduce(MPI_Comm comm, const vs_image *partial, const int *orde
     MPI_Comm_rank(comm, &rank);
     MPI_Comm_size(comm, &n);
     *bytes_sent = 0;
-    /* the union of the touched rectangles (an empty one adds nothing) */
-    const mpi_rect mine = mpi_touched(partial);
-    const int empty = mine.x1 == mine.x0;
-    int b[4] = {empty ? -partial->width : -mine.x0, empty ? -partial->height : -mine.y0, mine.x1, mine.y1}, u[4];
-    MPI_Allreduce(b, u, 4, MPI_INT, MPI_MAX, comm);
-    mpi_rect all = {-u[0], -u[1], u[2], u[3]};
-    if (all.x1 <= all.x0 || all.y1 <= all.y0) all = (mpi_rect){0, 0, 0, 0};
+    const mpi_rect all = union_rect(comm, partial);
     /* ranks numbered front to back; rank 0 of comm is where the image ends */
     int pos = 0, root = 0;
     for (int i = 0; i < n; i++) {
@@ -195,9 +204,163 @@ int mpi_composite_reduce(MPI_Comm comm, const vs_image *partial, const int *orde
     free(buf);
     free(res);
     if (rank != 0) return 0;
-    finish(acc, (size_t)partial->width * partial->height, background);
-    out->width = partial->width;
-    out->height = partial->height;
-    out->rgba = acc;
+    finish(acc, partial, background, out);
+    return 0;
+}
+
+/* ---- binary swap ---- */
+
+/* Pixels of a premultiplied buffer over the union rectangle (w wide): the
+ * box [x0, x1) x [y0, y1) in union coordinates. */
+typedef struct piece {
+    int x0, y0, x1, y1;
+} piece;
+
+static size_t piece_px(const piece *p) { return p->x1 > p->x0 && p->y1 > p->y0 ? (size_t)(p->x1 - p->x0) * (size_t)(p->y1 - p->y0) : 0; }
+
+/* The part of rows [y0, y1) of buf that holds any opacity. */
+static piece touched_rows(const float *buf, int w, int y0, int y1)
+{
+    piece p = {w, y1, 0, y0};
+    for (int y = y0; y < y1; y++)
+        for (int x = 0; x < w; x++)
+            if (buf[4 * ((size_t)y * w + x) + 3] > 0.0f) {
+                if (x < p.x0) p.x0 = x;
+                if (x >= p.x1) p.x1 = x + 1;
+                if (y < p.y0) p.y0 = y;
+                if (y >= p.y1) p.y1 = y + 1;
+            }
+    if (p.x1 <= p.x0 || p.y1 <= p.y0) p = (piece){0, 0, 0, 0};
+    return p;
+}
+
+/* The piece's pixels of buf, row after row, into dst. */
+static void copy_piece(const float *buf, int w, const piece *p, float *dst)
+{
+    for (int y = p->y0; y < p->y1; y++) {
+        const size_t n = 4 * (size_t)(p->x1 - p->x0);
+        memcpy(dst, buf + 4 * ((size_t)y * w + p->x0), n * sizeof *dst);
+        dst += n;
+    }
+}
+
+/* Composites the received piece into buf: over it when this rank is
+ * nearer the eye (front), under it otherwise. */
+static void merge(float *buf, int w, const piece *p, const float *src, int front)
+{
+    for (int y = p->y0; y < p->y1; y++)
+        for (int x = p->x0; x < p->x1; x++, src += 4) {
+            float *d = buf + 4 * ((size_t)y * w + x);
+            if (front) {
+                const float t = 1.0f - d[3];
+                for (int c = 0; c < 4; c++) d[c] += t * src[c];
+            } else {
+                const float t = 1.0f - src[3];
+                for (int c = 0; c < 4; c++) d[c] = src[c] + t * d[c];
+            }
+        }
+}
+
+/* Sends the touched part of rows [y0, y1) to `to` and takes `from`'s piece
+ * into tmp (room for the rows); returns the piece received. */
+static piece swap_rows(MPI_Comm depth, const float *buf, int w, int y0, int y1, int to, int from, float *tmp,
+                       float *out, uint64_t *bytes_sent)
+{
+    piece mine = to >= 0 ? touched_rows(buf, w, y0, y1) : (piece){0, 0, 0, 0}, got = {0, 0, 0, 0};
+    MPI_Sendrecv(&mine, 4, MPI_INT, to >= 0 ? to : MPI_PROC_NULL, 2, &got, 4, MPI_INT,
+                 from >= 0 ? from : MPI_PROC_NULL, 2, depth, MPI_STATUS_IGNORE);
+    const size_t ns = piece_px(&mine), nr = piece_px(&got);
+    if (ns) copy_piece(buf, w, &mine, out);
+    MPI_Sendrecv(out, (int)(4 * ns), MPI_FLOAT, ns ? to : MPI_PROC_NULL, 3, tmp, (int)(4 * nr), MPI_FLOAT,
+                 nr ? from : MPI_PROC_NULL, 3, depth, MPI_STATUS_IGNORE);
+    if (to >= 0) *bytes_sent += sizeof mine + 16 * (uint64_t)ns;
+    return got;
+}
+
+int mpi_composite_swap(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
+                       vs_image *out, uint64_t *bytes_sent)
+{
+    int rank, n;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &n);
+    *bytes_sent = 0;
+    const mpi_rect all = union_rect(comm, partial);
+    const int w = all.x1 - all.x0, h = all.y1 - all.y0;
+    const size_t count = rect_floats(&all);
+    float *buf = malloc((count ? count : 4) * sizeof *buf), *tmp = malloc((count ? count : 4) * sizeof *tmp),
+          *snd = malloc((count ? count : 4) * sizeof *snd);
+    float *acc = rank == 0 ? calloc((size_t)partial->width * partial->height * 4, sizeof *acc) : NULL;
+    int failed = !buf || !tmp || !snd || (rank == 0 && !acc), any;
+    MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+    if (any || count > (size_t)INT32_MAX) {
+        free(buf);
+        free(tmp);
+        free(snd);
+        free(acc);
+        if (!any) MPI_Abort(comm, 2); /* 2^31 floats: not an image this makes */
+        return rank == 0;
+    }
+    /* ranks numbered front to back */
+    int pos = 0;
+    for (int i = 0; i < n; i++)
+        if (order[i] == rank) pos = i;
+    MPI_Comm depth;
+    MPI_Comm_split(comm, 0, pos, &depth);
+    if (count) pack(partial, &all, buf);
+
+    /* fold down to a power of two: of the first 2*extra ranks, each odd one
+     * (behind) hands its image to the even one before it */
+    int p2 = 1;
+    while (2 * p2 <= n) p2 *= 2;
+    const int extra = n - p2;
+    int vi = pos < 2 * extra ? (pos % 2 ? -1 : pos / 2) : pos - extra;
+    if (pos < 2 * extra) {
+        const int odd = pos % 2;
+        piece got = swap_rows(depth, buf, w, 0, h, odd ? pos - 1 : -1, odd ? -1 : pos + 1, tmp, snd, bytes_sent);
+        if (!odd) merge(buf, w, &got, tmp, 1);
+    }
+    /* binary swap among the p2 ranks left: each round halves the rows a
+     * rank keeps and composites its partner's half into them */
+    int y0 = 0, y1 = h;
+    if (vi >= 0)
+        for (int bit = 1; bit < p2; bit *= 2) {
+            const int pv = vi ^ bit, partner = pv < extra ? 2 * pv : pv + extra;
+            const int mid = y0 + (y1 - y0) / 2, keep_low = !(vi & bit);
+            const int sy0 = keep_low ? mid : y0, sy1 = keep_low ? y1 : mid;
+            piece got = swap_rows(depth, buf, w, sy0, sy1, partner, partner, tmp, snd, bytes_sent);
+            merge(buf, w, &got, tmp, vi < pv);
+            if (keep_low) y1 = mid;
+            else y0 = mid;
+        }
+    /* rank 0 of comm gathers the disjoint pieces */
+    piece fin = vi >= 0 ? touched_rows(buf, w, y0, y1) : (piece){0, 0, 0, 0};
+    piece *pieces = rank == 0 ? malloc(sizeof *pieces * (size_t)n) : NULL;
+    if (rank == 0 && !pieces) MPI_Abort(comm, 2);
+    MPI_Gather(&fin, 4, MPI_INT, pieces, 4, MPI_INT, 0, comm);
+    if (rank != 0) {
+        if (piece_px(&fin)) {
+            copy_piece(buf, w, &fin, snd);
+            MPI_Send(snd, (int)(4 * piece_px(&fin)), MPI_FLOAT, 0, 4, comm);
+            *bytes_sent += sizeof fin + 16 * (uint64_t)piece_px(&fin);
+        }
+    } else {
+        for (int r = 0; r < n; r++) {
+            const piece *p = &pieces[r];
+            if (!piece_px(p)) continue;
+            if (r == 0) copy_piece(buf, w, p, tmp);
+            else MPI_Recv(tmp, (int)(4 * piece_px(p)), MPI_FLOAT, r, 4, comm, MPI_STATUS_IGNORE);
+            const float *src = tmp;
+            for (int y = p->y0; y < p->y1; y++, src += 4 * (size_t)(p->x1 - p->x0))
+                memcpy(acc + 4 * ((size_t)(all.y0 + y) * partial->width + all.x0 + p->x0), src,
+                       4 * (size_t)(p->x1 - p->x0) * sizeof *src);
+        }
+    }
+    MPI_Comm_free(&depth);
+    free(pieces);
+    free(buf);
+    free(tmp);
+    free(snd);
+    if (rank != 0) return 0;
+    finish(acc, partial, background, out);
     return 0;
 }

@@ -35,4 +35,18 @@ int mpi_composite_gather(MPI_Comm comm, const vs_image *partial, const int *orde
 int mpi_composite_reduce(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
                          vs_image *out, uint64_t *bytes_sent);
 
+/* The same image by binary swap (Ma et al. 1994) over the union of the
+ * touched rectangles, ranks renumbered front to back in `order`: with N not
+ * a power of two the first 2(N - P) ranks first fold pairwise to P, a power
+ * of two; then log2 P rounds, in each of which a rank gives its partner
+ * one half of the rows it still holds and composites the partner's other
+ * half into its own (over or under, by which of the two is nearer the eye),
+ * sending only the part of the half that holds any opacity; then the P
+ * disjoint pieces go to rank 0.  Every rank sends about 16 bytes per pixel
+ * of the union in all, whatever N, and composites in parallel.  Differs
+ * from the gather by float association only; the same run to run.  Same
+ * contract as the gather. */
+int mpi_composite_swap(MPI_Comm comm, const vs_image *partial, const int *order, const float background[4],
+                       vs_image *out, uint64_t *bytes_sent);
+
 #endif

@@ -6,6 +6,8 @@
 
 #include "vsplat.h"
 
+#include <stdint.h>
+
 #define MPI_MAX_RANKS 4096
 
 /* One rank's part: it owns (composites) voxels [lo, hi) and holds
@@ -30,13 +32,31 @@ typedef struct mpi_decomp {
     int nnodes;
 } mpi_decomp;
 
-/* Split vol into n bricks: at each node the longest axis (in mm) is cut
- * where the weight of its slabs divides in the ratio of the ranks on each
- * side.  A voxel weighs 1 if its value can be non-transparent (value in
- * the open range (alpha_lo, alpha_hi)) plus 1/16, so empty space is split
- * by size.  ghost: voxels added on each inner face.  Returns 0, or 1 if the
- * volume is too small for n bricks (a side thinner than one voxel). */
-int mpi_decompose(const vs_volume *vol, double alpha_lo, double alpha_hi, int n, int ghost, mpi_decomp *D);
+/* What the split balances: per cell of cell^3 voxels, how many voxels can
+ * be non-transparent (value in the open range (alpha_lo, alpha_hi)).  Cells
+ * are as small as 2^21 of them allow, so the grid is a few MB whatever the
+ * volume; the ranks that read a volume in parts each add their slabs and
+ * sum the grids, and every split agrees with the one of the whole volume. */
+typedef struct mpi_weights {
+    int dims[3];      /* the volume's                                      */
+    int cell;         /* voxels per cell side                              */
+    int g[3];         /* cells per axis                                    */
+    uint32_t *count;  /* g[0]*g[1]*g[2], x fastest                         */
+} mpi_weights;
+/* Zeroed counts for a volume of dims; 1 if out of memory. */
+int mpi_weights_init(mpi_weights *W, const int dims[3]);
+void mpi_weights_free(mpi_weights *W);
+/* Counts the voxels of part, which holds slices z0 .. z0 + its depth of the
+ * volume (every x and y). */
+void mpi_weights_add(mpi_weights *W, const vs_volume *part, int z0, double alpha_lo, double alpha_hi);
+
+/* Split the volume into n bricks: at each node the longest axis (in mm) is
+ * cut at a cell boundary where the weight of its cell slabs divides in the
+ * ratio of the ranks on each side.  A cell weighs its count plus 1/16 of its
+ * voxels, so empty space is split by size.  ghost: voxels added on each
+ * inner face.  Returns 0, or 1 if the volume is too small for n bricks (a
+ * side thinner than one cell). */
+int mpi_decompose(const mpi_weights *W, const double spacing[3], int n, int ghost, mpi_decomp *D);
 
 /* Front-to-back order of the ranks.  eye: the eye in index coordinates
  * (perspective), or NULL for orthographic with view direction dir in

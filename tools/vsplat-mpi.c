@@ -1,12 +1,15 @@
 /* vsplat-mpi — sort-last rendering over MPI (docs/DISTRIBUTED.md):
  *     mpirun -np N vsplat-mpi render INPUT [vsplat render options] -o OUT
- * Rank 0 reads the volume, splits it into N bricks (k-d, balanced by
- * relevant voxels) and sends each rank its brick with ghost layers; every
- * rank renders its brick with the ordinary pipelines, cropped to the voxels
- * it owns; the partial images are composited in visibility order (rank 0
- * receiving them in turn, or with --composite reduce an MPI reduction with
- * a non-commutative "over") and rank 0 writes.  N = 1 is `vsplat render`
- * itself.
+ * The volume is split into N bricks (k-d, balanced by relevant voxels),
+ * each with the ghost layers its kernel and gradients need.  Raw and NIfTI
+ * files are read in parts: every rank reads a z-slab (for the value range,
+ * the default iso's histogram and the split's weights), then its brick, so
+ * no rank holds the whole volume; other formats and scenes are read by rank
+ * 0, which sends the bricks.  Every rank renders its brick with the ordinary
+ * pipelines, cropped to the voxels it owns; the partial images are
+ * composited in visibility order (rank 0 receiving them in turn; with
+ * --composite reduce an MPI reduction with a non-commutative "over"; with
+ * --composite swap binary swap) and rank 0 writes.  N = 1 is `vsplat render` itself.
  *
  * Errors: every step that can fail ends in a status exchange (the lowest
  * failing rank's message goes to all), so all ranks exit with the same code
@@ -133,6 +136,7 @@ typedef struct plan {
     double affine[12]; /* index -> world of the whole volume          */
     int oriented;      /* the file gave it (vs_volume_affine)          */
     vs_view view;      /* the view, settled as vsplat settles it       */
+    double alo, ahi;   /* values that can be non-transparent (the split's weights) */
 } plan;
 
 /* Per-rank figures, gathered on rank 0 for --print-stats and --stats. */
@@ -141,6 +145,10 @@ typedef struct rank_stats {
     double ms_render, ms_composite, ms_scatter;
     double ms_load, ms_prepare; /* rank 0: reading, classification + split */
     double voxels_held, voxels_relevant, voxels_splatted;
+    double voxels_read; /* from the file: slab and brick, or the whole volume */
+    double voxels_peak; /* the most held at once: the larger of the two   */
+    double voxels_total; /* the whole volume's */
+    int parts;          /* every rank read its parts (else rank 0 read it all) */
     double bytes_sent, bytes_scatter;
 } rank_stats;
 
@@ -164,8 +172,18 @@ static void print_table(FILE *f, const rank_stats *rs, int n, double ms_total)
     }
     fprintf(f, "%-4s %-26s %10.0f %10.0f %9.2f %9.2f %12.0f\n", "all", "(render, comp.: slowest)", t.voxels_relevant,
             t.voxels_splatted, t.ms_render, t.ms_composite, t.bytes_sent);
-    fprintf(f, "rank 0: read %.2f ms, classification and split %.2f ms, scatter %.2f ms; wall clock %.2f ms\n",
-            rs[0].ms_load, rs[0].ms_prepare, rs[0].ms_scatter, ms_total);
+    if (rs[0].parts) {
+        double most = 0, slowest = 0;
+        for (int r = 0; r < n; r++) {
+            if (rs[r].voxels_peak > most) most = rs[r].voxels_peak;
+            if (rs[r].ms_load > slowest) slowest = rs[r].ms_load;
+        }
+        fprintf(f, "each rank read its slab, then its brick: at most %.0f of the %.0f voxels held at once, %.2f ms (slowest)\n", most,
+                rs[0].voxels_total, slowest);
+    } else
+        fprintf(f, "rank 0 read the whole volume: %.0f voxels, %.2f ms\n", rs[0].voxels_total, rs[0].ms_load);
+    fprintf(f, "rank 0: classification and split %.2f ms, scatter %.2f ms; wall clock %.2f ms\n", rs[0].ms_prepare,
+            rs[0].ms_scatter, ms_total);
 }
 
 static int write_stats_json(const char *path, const rank_stats *rs, int n, double ms_total, step *sp)
@@ -173,17 +191,20 @@ static int write_stats_json(const char *path, const rank_stats *rs, int n, doubl
     FILE *f = !strcmp(path, "-") ? stdout : fopen(path, "w");
     if (!f) return fail(sp, EXIT_USAGE, "%s: cannot write%s", path, NULL);
     fprintf(f,
-            "{\"ranks\": %d, \"ms_total\": %.3f, \"ms_load\": %.3f, \"ms_prepare\": %.3f, \"ms_scatter\": %.3f, "
-            "\"per_rank\": [\n",
-            n, ms_total, rs[0].ms_load, rs[0].ms_prepare, rs[0].ms_scatter);
+            "{\"ranks\": %d, \"reads\": \"%s\", \"voxels\": %.0f, \"ms_total\": %.3f, \"ms_load\": %.3f, "
+            "\"ms_prepare\": %.3f, \"ms_scatter\": %.3f, \"per_rank\": [\n",
+            n, rs[0].parts ? "per rank" : "rank 0", rs[0].voxels_total, ms_total, rs[0].ms_load, rs[0].ms_prepare,
+            rs[0].ms_scatter);
     for (int r = 0; r < n; r++) {
         const rank_stats *p = &rs[r];
         fprintf(f,
                 "  {\"rank\": %d, \"lo\": [%d, %d, %d], \"hi\": [%d, %d, %d], \"voxels_held\": %.0f, "
                 "\"voxels_relevant\": %.0f, \"voxels_splatted\": %.0f, \"ms_render\": %.3f, "
-                "\"ms_composite\": %.3f, \"bytes_composite\": %.0f, \"bytes_scatter\": %.0f}%s\n",
+                "\"ms_composite\": %.3f, \"bytes_composite\": %.0f, \"bytes_scatter\": %.0f, "
+                "\"voxels_read\": %.0f, \"voxels_peak\": %.0f, \"ms_load\": %.3f}%s\n",
                 r, p->lo[0], p->lo[1], p->lo[2], p->hi[0], p->hi[1], p->hi[2], p->voxels_held, p->voxels_relevant,
-                p->voxels_splatted, p->ms_render, p->ms_composite, p->bytes_sent, p->bytes_scatter,
+                p->voxels_splatted, p->ms_render, p->ms_composite, p->bytes_sent, p->bytes_scatter, p->voxels_read,
+                p->voxels_peak, p->ms_load,
                 r + 1 < n ? "," : "");
     }
     fprintf(f, "]}\n");
@@ -210,7 +231,7 @@ static int render_single(vs_context *ctx, const vs_volume *vol, const cli_opts *
     rs.ms_load = ms_load;
     rs.voxels_relevant = (double)st.voxels_relevant;
     rs.voxels_splatted = (double)st.voxels_splatted;
-    rs.voxels_held = (double)st.voxels_total;
+    rs.voxels_held = rs.voxels_read = rs.voxels_peak = rs.voxels_total = (double)st.voxels_total;
     const double ms_total = 1e3 * (MPI_Wtime() - t_start);
     if (o->print_stats) print_table(stdout, &rs, 1, ms_total);
     if (o->stats_path && write_stats_json(o->stats_path, &rs, 1, ms_total, sp)) return sp->rc;
@@ -225,12 +246,9 @@ static int render_single(vs_context *ctx, const vs_volume *vol, const cli_opts *
  * sheet, one sheet across), see all the voxels whose kernel reaches them.
  * A pixel spans more than a voxel when zoomed out; perspective doubles the
  * margin for the far side. */
-static int ghost_layers(const vs_settings *s, const vs_volume *vol)
+static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3])
 {
-    int d[3];
-    double sp[3], extent = 0.0, unit = INFINITY;
-    vs_volume_dims(vol, d);
-    vs_volume_spacing(vol, sp);
+    double extent = 0.0, unit = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (d[a] * sp[a] > extent) extent = d[a] * sp[a];
         if (sp[a] < unit) unit = sp[a];
@@ -250,27 +268,37 @@ static int run(int rank, int n, int argc, char **argv)
     if (argc < 2 || strcmp(argv[1], "render") != 0) {
         if (rank == 0)
             fprintf(stderr, "vsplat-mpi: usage: mpirun -np N vsplat-mpi render INPUT|--scene NAME "
-                            "[vsplat render options] [--composite gather|reduce] -o OUT\n");
+                            "[vsplat render options] [--composite gather|reduce|swap] [--read parts|root] -o OUT\n");
         return EXIT_USAGE;
     }
-    /* --composite gather|reduce is vsplat-mpi's own option (default gather,
-     * the cheaper at the rank counts measured: docs/DISTRIBUTED.md), taken
-     * out before the render options are parsed */
-    int gather = 1, na = 0;
+    /* vsplat-mpi's own options, taken out before the render options are
+     * parsed: --composite gather|reduce|swap (default gather, the cheaper
+     * at the rank counts measured: docs/DISTRIBUTED.md); --read parts|root
+     * (default parts: every rank reads its part where the format allows;
+     * root: rank 0 reads the whole volume and sends the bricks) */
+    int (*compositor)(MPI_Comm, const vs_image *, const int *, const float *, vs_image *, uint64_t *) =
+        mpi_composite_gather;
+    int read_parts = 1, na = 0;
     char **args = malloc(sizeof *args * (size_t)(argc > 2 ? argc - 2 : 1));
     if (!args) return EXIT_INTERNAL;
     for (int i = 2; i < argc; i++) {
-        if (strcmp(argv[i], "--composite") != 0) {
+        const int composite = !strcmp(argv[i], "--composite");
+        if (!composite && strcmp(argv[i], "--read") != 0) {
             args[na++] = argv[i];
             continue;
         }
-        const char *m = i + 1 < argc ? argv[++i] : "";
-        if (strcmp(m, "reduce") != 0 && strcmp(m, "gather") != 0) {
-            if (rank == 0) fprintf(stderr, "vsplat-mpi: --composite: expected gather or reduce, got '%s'\n", m);
+        const char *opt = argv[i], *m = i + 1 < argc ? argv[++i] : "";
+        const char *a = composite ? "gather" : "parts", *b = composite ? "reduce" : "root";
+        const int swap = composite && !strcmp(m, "swap");
+        if (strcmp(m, a) != 0 && strcmp(m, b) != 0 && !swap) {
+            if (rank == 0)
+                fprintf(stderr, "vsplat-mpi: %s: expected %s, got '%s'\n", opt,
+                        composite ? "gather, reduce or swap" : "parts or root", m);
             free(args);
             return EXIT_USAGE;
         }
-        gather = !strcmp(m, "gather");
+        if (composite) compositor = swap ? mpi_composite_swap : !strcmp(m, a) ? mpi_composite_gather : mpi_composite_reduce;
+        else read_parts = !strcmp(m, a);
     }
     const int bad_args = cli_parse_render(na, args, &o, err, sizeof err);
     free(args);
@@ -300,31 +328,77 @@ static int run(int rank, int n, int argc, char **argv)
     int rc = agree(&sp, rank, n);
     if (rc) return rc;
 
-    /* rank 0 reads the whole volume (every format; per-rank reads of raw
-     * and NIfTI slabs are not done yet) */
-    vs_volume *full = NULL, *brick = NULL;
+    /* Raw and NIfTI files are read in parts: every rank reads a z-slab for
+     * the value range, the histogram and the split's weights, then its
+     * brick, and no rank holds the whole volume.  Other formats (and
+     * scenes): rank 0 reads the whole volume and sends the bricks. */
+    int dims[3] = {0, 0, 0},
+        parts = n > 1 && read_parts && !o.scene && vs_volume_file_dims(ctx, o.input, &o.load, dims) == VS_OK;
+    MPI_Allreduce(MPI_IN_PLACE, &parts, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    vs_volume *full = NULL, *brick = NULL; /* full: the whole volume (rank 0) or this rank's slab */
     vs_tf_point *tf = NULL;
-    double alo = 0, ahi = 0;
+    mpi_weights W;
+    memset(&W, 0, sizeof W);
     plan P;
     memset(&P, 0, sizeof P);
     double ms_load = 0, ms_prepare = 0;
-    if (rank == 0) {
+    double voxels_read = 0;
+    int z0 = 0;
+    if (parts) {
+        if (mpi_weights_init(&W, dims)) fail(&sp, EXIT_INTERNAL, "out of memory%s", "", NULL);
+        const int gz = W.g[2], c = W.cell;
+        const int a = (int)((long)rank * gz / n), b = (int)((long)(rank + 1) * gz / n);
+        z0 = a * c < dims[2] ? a * c : dims[2];
+        const int z1 = b * c < dims[2] ? b * c : dims[2];
+        const double t_load = MPI_Wtime();
+        if (!sp.rc && z1 > z0) {
+            const int lo[3] = {0, 0, z0}, hi[3] = {dims[0], dims[1], z1};
+            st = vs_volume_load_box(ctx, o.input, &o.load, lo, hi, &full);
+            if (st != VS_OK) lib_fail(&sp, ctx, st, o.input);
+            voxels_read = (double)dims[0] * dims[1] * (z1 - z0);
+        }
+        ms_load = 1e3 * (MPI_Wtime() - t_load);
+    } else if (rank == 0) {
         const double t_load = MPI_Wtime();
         st = o.scene ? vs_volume_scene(ctx, o.scene, &full) : vs_volume_load(ctx, o.input, &o.load, &full);
         ms_load = 1e3 * (MPI_Wtime() - t_load);
         if (st != VS_OK) lib_fail(&sp, ctx, st, o.scene ? "--scene" : o.input);
-        if (!sp.rc && o.tf_path) {
+        if (!sp.rc) {
+            vs_volume_dims(full, dims);
+            voxels_read = (double)dims[0] * dims[1] * dims[2];
+        }
+    }
+    rc = agree(&sp, rank, n);
+    if (rc) goto done;
+    const double t_prep = MPI_Wtime();
+    if (parts) {
+        /* the whole volume's range and, for the default iso, its histogram */
+        double r[2] = {INFINITY, INFINITY};
+        if (full) {
+            vs_volume_range(full, &r[0], &r[1]);
+            r[1] = -r[1];
+        }
+        MPI_Allreduce(MPI_IN_PLACE, r, 2, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+        if (full) vs_volume_set_range(full, r[0], -r[1]);
+        if (!o.tf_path && !o.s.has_iso) {
+            double hist[VS_HISTOGRAM_BINS] = {0};
+            if (full) vs_volume_histogram(full, hist);
+            MPI_Allreduce(MPI_IN_PLACE, hist, VS_HISTOGRAM_BINS, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+            o.s.has_iso = 1; /* what vs_render takes without an iso */
+            o.s.iso_lo = vs_histogram_iso(hist, r[0], -r[1]);
+            o.s.iso_hi = INFINITY;
+        }
+    }
+    if (rank == 0 && n > 1) { /* on the whole volume, or on rank 0's slab with the whole range */
+        if (o.tf_path) {
             st = vs_tf_load_for_volume(ctx, o.tf_path, full, &tf, &o.s.tf_count);
             if (st != VS_OK) lib_fail(&sp, ctx, st, o.tf_path);
             o.s.tf = tf;
         }
-        if (!sp.rc && n == 1) render_single(ctx, full, &o, t_start, ms_load, &sp);
-        const double t_prep = MPI_Wtime();
-        if (!sp.rc && n > 1) resolve_classification(ctx, full, &o.s, &alo, &ahi, &sp);
-        ms_prepare = 1e3 * (MPI_Wtime() - t_prep);
-        if (!sp.rc && n > 1) {
+        if (!sp.rc) resolve_classification(ctx, full, &o.s, &P.alo, &P.ahi, &sp);
+        if (!sp.rc) {
             P.type = vs_volume_type(full);
-            vs_volume_dims(full, P.dims);
+            memcpy(P.dims, dims, sizeof P.dims);
             vs_volume_spacing(full, P.spacing);
             vs_volume_range(full, &P.vmin, &P.vmax);
             P.has_iso = o.s.has_iso;
@@ -332,14 +406,21 @@ static int run(int rank, int n, int argc, char **argv)
             P.iso_hi = o.s.iso_hi;
             P.ramp = o.s.ramp;
             P.tf_count = o.s.tf_count;
-            P.oriented = vs_volume_affine(full, P.affine);
+            P.oriented = vs_volume_affine(full, P.affine); /* rank 0's slab starts at z = 0 */
             P.view = o.s.view == VS_VIEW_AUTO ? (P.oriented ? VS_VIEW_ANTERIOR : VS_VIEW_ANGLES) : o.s.view;
         }
+    } else if (rank == 0) {
+        if (o.tf_path) {
+            st = vs_tf_load_for_volume(ctx, o.tf_path, full, &tf, &o.s.tf_count);
+            if (st != VS_OK) lib_fail(&sp, ctx, st, o.tf_path);
+            o.s.tf = tf;
+        }
+        if (!sp.rc) render_single(ctx, full, &o, t_start, ms_load, &sp);
     }
     rc = agree(&sp, rank, n);
     if (rc || n == 1) goto done;
 
-    /* the plan, the transfer function, the split */
+    /* the plan, the transfer function */
     MPI_Bcast(&P, (int)sizeof P, MPI_BYTE, 0, MPI_COMM_WORLD);
     o.s.has_iso = P.has_iso;
     o.s.iso_lo = P.iso_lo;
@@ -352,23 +433,44 @@ static int run(int rank, int n, int argc, char **argv)
         o.s.tf = tf;
         o.s.tf_count = P.tf_count;
     }
+
+    /* the split's weights: every rank's slab, summed on rank 0; or rank 0's
+     * whole volume */
+    if (parts) {
+        if (full) mpi_weights_add(&W, full, z0, P.alo, P.ahi);
+        MPI_Reduce(rank == 0 ? MPI_IN_PLACE : W.count, W.count, W.g[0] * W.g[1] * W.g[2], MPI_UINT32_T, MPI_SUM, 0,
+                   MPI_COMM_WORLD);
+        vs_volume_release(full); /* the slab: each rank reads its brick next */
+        full = NULL;
+    } else if (rank == 0) {
+        if (mpi_weights_init(&W, dims)) fail(&sp, EXIT_INTERNAL, "out of memory%s", "", NULL);
+        else mpi_weights_add(&W, full, 0, P.alo, P.ahi);
+    }
     mpi_decomp *D = calloc(1, sizeof *D);
     if (!D) fail(&sp, EXIT_INTERNAL, "out of memory%s", "", NULL);
-    const double t_split = MPI_Wtime();
-    if (!sp.rc && rank == 0 && mpi_decompose(full, alo, ahi, n, ghost_layers(&o.s, full), D))
+    if (!sp.rc && rank == 0 && mpi_decompose(&W, P.spacing, n, ghost_layers(&o.s, P.dims, P.spacing), D))
         fail(&sp, EXIT_USAGE, "%s: the volume is too small to split into this many bricks%s",
              o.scene ? o.scene : o.input, NULL);
-    ms_prepare += 1e3 * (MPI_Wtime() - t_split);
+    mpi_weights_free(&W);
+    ms_prepare = 1e3 * (MPI_Wtime() - t_prep);
     rc = agree(&sp, rank, n);
     if (rc) goto done_d;
     MPI_Bcast(D, (int)sizeof *D, MPI_BYTE, 0, MPI_COMM_WORLD);
 
-    /* every rank makes room for its brick, then rank 0 sends them */
+    /* every rank reads its brick, or makes room for it and rank 0 sends them */
     const mpi_brick *B = &D->brick[rank];
     const int gd[3] = {B->ghi[0] - B->glo[0], B->ghi[1] - B->glo[1], B->ghi[2] - B->glo[2]};
+    const double t_brick = MPI_Wtime();
     if (injected_failure(rank))
         fail(&sp, EXIT_INTERNAL, "cannot take its brick (failure injected by VSPLAT_MPI_FAIL_RANK)%s", "", NULL);
-    else if ((st = vs_volume_create(ctx, P.type, gd, P.spacing, &brick)) != VS_OK)
+    else if (parts) {
+        if ((st = vs_volume_load_box(ctx, o.input, &o.load, B->glo, B->ghi, &brick)) != VS_OK)
+            lib_fail(&sp, ctx, st, o.input);
+        else {
+            vs_volume_set_range(brick, P.vmin, P.vmax);
+            voxels_read += (double)gd[0] * gd[1] * gd[2];
+        }
+    } else if ((st = vs_volume_create(ctx, P.type, gd, P.spacing, &brick)) != VS_OK)
         lib_fail(&sp, ctx, st, "its brick");
     else {
         vs_volume_set_range(brick, P.vmin, P.vmax);
@@ -380,6 +482,7 @@ static int run(int rank, int n, int argc, char **argv)
             for (int a = 0; a < 3; a++) m[4 * r + 3] += P.affine[4 * r + a] * B->glo[a];
         if (P.oriented && (st = vs_volume_set_transform(ctx, brick, m)) != VS_OK) lib_fail(&sp, ctx, st, "its brick");
     }
+    if (parts) ms_load += 1e3 * (MPI_Wtime() - t_brick);
     rc = agree(&sp, rank, n);
     if (rc) goto done_d;
     const double t_scatter = MPI_Wtime();
@@ -387,7 +490,9 @@ static int run(int rank, int n, int argc, char **argv)
     const MPI_Datatype et = mpi_type_of(P.type);
     int esize;
     MPI_Type_size(et, &esize);
-    if (rank == 0) {
+    if (parts) {
+        /* nothing to send */
+    } else if (rank == 0) {
         /* a subarray type per brick: no copy of the volume is made */
         const int sizes[3] = {P.dims[2], P.dims[1], P.dims[0]};
         for (int r = 0; r < n; r++) {
@@ -451,8 +556,7 @@ static int run(int rank, int n, int argc, char **argv)
     const double t_comp = MPI_Wtime();
     vs_image img = {0, 0, NULL};
     uint64_t bytes_sent = 0;
-    if ((gather ? mpi_composite_gather : mpi_composite_reduce)(MPI_COMM_WORLD, &part, order, o.s.background, &img,
-                                                               &bytes_sent))
+    if (compositor(MPI_COMM_WORLD, &part, order, o.s.background, &img, &bytes_sent))
         fail(&sp, EXIT_INTERNAL, "compositing: out of memory%s", "", NULL);
     const double ms_comp = 1e3 * (MPI_Wtime() - t_comp);
     free(order);
@@ -473,6 +577,11 @@ static int run(int rank, int n, int argc, char **argv)
     mine.ms_load = ms_load;
     mine.ms_prepare = ms_prepare;
     mine.voxels_held = (double)gd[0] * gd[1] * gd[2];
+    mine.voxels_read = voxels_read;
+    const double first = parts ? voxels_read - mine.voxels_held : voxels_read; /* slab, or the whole volume */
+    mine.voxels_peak = first > mine.voxels_held ? first : mine.voxels_held;
+    mine.voxels_total = (double)P.dims[0] * P.dims[1] * P.dims[2];
+    mine.parts = parts;
     mine.voxels_relevant = (double)stats.voxels_relevant;
     mine.voxels_splatted = (double)stats.voxels_splatted;
     mine.bytes_sent = (double)bytes_sent;
