@@ -99,6 +99,7 @@ typedef struct down_job {
     int dec[3];
     float *scratch; /* per worker: six rows */
     size_t per_worker;
+    float base; /* what a non-finite voxel reads as: the value outside the volume */
 } down_job;
 
 static const float taps[4] = {0.125f, 0.375f, 0.375f, 0.125f};
@@ -129,7 +130,6 @@ static void store_row(struct vs_volume *v, size_t at, const float *x, int n)
     }
 }
 
-static inline float fin(float x) { return isfinite(x) ? x : 0.0f; }
 
 /* row = sum of w[t] * row jj of input plane p[t], as float */
 #define ZSUM(T, CONV)                                                                                              \
@@ -143,6 +143,7 @@ static inline float fin(float x) { return isfinite(x) ? x : 0.0f; }
             for (int i = 0; i < d[0]; i++) row[i] = CONV(q[0][i]);                                                 \
     } while (0)
 #define AS_FLOAT(x) ((float)(x))
+#define AS_FINITE(x) (isfinite(x) ? (x) : J->base)
 
 /* Input row jj of output plane k's z taps, filtered in z into `row`. */
 static void z_row(const down_job *J, const int p[4], const float w[4], int n, int jj, float *row)
@@ -153,7 +154,7 @@ static void z_row(const down_job *J, const int p[4], const float w[4], int n, in
     case VS_U8: ZSUM(uint8_t, AS_FLOAT); break;
     case VS_I16: ZSUM(int16_t, AS_FLOAT); break;
     case VS_U16: ZSUM(uint16_t, AS_FLOAT); break;
-    default: ZSUM(float, fin); break;
+    default: ZSUM(float, AS_FINITE); break;
     }
 }
 
@@ -230,7 +231,7 @@ static void place_level(struct vs_volume *v, const struct vs_volume *in)
 static vs_status build_level(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *in,
                              const struct vs_volume *full, struct vs_volume **out)
 {
-    down_job J = {.in = in};
+    down_job J = {.in = in, .base = (float)vs_volume_base(full)};
     if (!next_axes(in->dims, in->spacing, J.dec))
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "levels of detail: no axis of %dx%dx%d can be halved",
                             in->dims[0], in->dims[1], in->dims[2]);

@@ -1,6 +1,6 @@
 /* Levels of detail (src/lod.c, vs_settings.lod_pixels):
  *  - the filter is its definition (odd sizes, faces clamped, NaN read as
- *    0), halves only axes that keep 8 voxels, and conserves: a level's mean is its volume's (even sizes, where
+ *    the value outside the volume: 0, or the minimum when negative), halves only axes that keep 8 voxels, and conserves: a level's mean is its volume's (even sizes, where
  *    every voxel has the same total weight), a constant stays constant;
  *  - the level follows the picture: small images splat a coarser level and
  *    a surface's voxels 4x fewer a level, large ones the full volume, lod_pixels 0
@@ -57,17 +57,20 @@ static void test_filter_definition(vs_context *ctx)
         if (!v) continue;
         float *f = vs_volume_data(v);
         unsigned r = 99u + (unsigned)s;
+        const float shift = s == 2 ? -50.0f : 0.0f; /* CT-like: empty space is the minimum */
         for (size_t i = 0; i < (size_t)d[0] * d[1] * d[2]; i++) {
             r = r * 1103515245u + 12345u;
-            f[i] = (float)((r >> 8) % 1000) / 10.0f;
+            f[i] = (float)((r >> 8) % 1000) / 10.0f + shift;
         }
-        f[0] = NAN; /* counts as empty space: 0 in the definition below */
+        f[0] = NAN; /* counts as empty space: the base in the definition below */
         vs_volume_update_range(v);
+        double lo;
+        vs_volume_range(v, &lo, NULL);
         vs_lod_cache *cache = NULL;
         const struct vs_volume *l1 = NULL;
         double ms, worst = 0;
         if (vs_lod_get(ctx, NULL, &cache, v, 1, &l1, &ms) == VS_OK && l1) {
-            f[0] = 0.0f;
+            f[0] = lo < 0.0 ? (float)lo : 0.0f;
             for (int k = 0; k < l1->dims[2]; k++)
                 for (int j = 0; j < l1->dims[1]; j++)
                     for (int i = 0; i < l1->dims[0]; i++) {
