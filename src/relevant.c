@@ -1,8 +1,12 @@
-/* Building the relevant-voxel list: an in-range mask, dilated by the seam
- * width with separable running maxima, then compacted in k, j, i order. */
+/* Building the relevant-voxel list: on the whole grid, an in-range mask
+ * dilated by the seam width with separable running maxima, then compacted
+ * in k, j, i order; for large volumes brick by brick when few bricks are
+ * reached (relevant_bricks.c); the cache around both. */
 #include "timing.h"
 #include "context.h"
 #include "relevant.h"
+#include "relevant_bricks.h"
+#include "relevant_class.h"
 #include "pool.h"
 
 #include <math.h>
@@ -15,17 +19,10 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
     free(rc->voxels);
     free(rc->bricks);
     free(rc->scratch);
+    free(rc->minmax);
     free(rc);
 }
 
-static int in_alpha_range(const vs_classify *c, double v)
-{
-    /* opacity is non-zero strictly inside (alpha_lo, alpha_hi) for ramps and
-     * on the closed range for hard thresholds */
-    if (!isfinite(v)) return 0;
-    if (c->ramp > 0 || c->use_points) return v > c->alpha_lo && v < c->alpha_hi;
-    return v >= c->alpha_lo && v <= c->alpha_hi;
-}
 
 /* OR-dilate a byte mask of flag bits by r voxels in a box (separable: one
  * pass per axis).  Each pass ORs whole contiguous runs — rows for x, rows of
@@ -97,23 +94,7 @@ static void dilate(struct vs_pool *pool, uint8_t *m, const int d[3], int r, uint
     vs_pool_run(pool, d[2], dilate_z, &J);
 }
 
-enum { BELOW = 1, INSIDE = 2, ABOVE = 4 };
 
-static uint8_t class_of(const vs_classify *c, double v)
-{
-    if (in_alpha_range(c, v)) return INSIDE;
-    if (!isfinite(v)) return 0;
-    return v <= c->alpha_lo ? BELOW : ABOVE;
-}
-
-/* Buffers of the previous list are reused (realloc) so that changing the
- * iso-range does not pay for fresh, page-faulting allocations each time. */
-static void *take(void **old, size_t bytes)
-{
-    void *p = realloc(*old, bytes ? bytes : 1);
-    if (p) *old = NULL;
-    return p;
-}
 
 /* The per-voxel passes of a rebuild, on the pool: classification and the
  * in-range test in chunks of planes; counting and filling per slab of
@@ -153,7 +134,7 @@ static void classify_planes(void *arg, int worker, int z)
     } break;
     default: {
         const float *p = (const float *)J->vol->data + i0;
-        for (size_t i = 0; i < plane; i++) mask[i] = class_of(J->c, p[i]);
+        for (size_t i = 0; i < plane; i++) mask[i] = vs_relevant_class(J->c, p[i]);
     } break;
     }
 }
@@ -166,9 +147,9 @@ static void finish_planes(void *arg, int worker, int z)
     uint8_t *mask = J->mask + (size_t)z * plane;
     if (J->combine)
         for (size_t i = 0; i < plane; i++)
-            mask[i] = (mask[i] & INSIDE) || (mask[i] & (BELOW | ABOVE)) == (BELOW | ABOVE);
+            mask[i] = (mask[i] & VS_REL_INSIDE) || (mask[i] & (VS_REL_BELOW | VS_REL_ABOVE)) == (VS_REL_BELOW | VS_REL_ABOVE);
     else
-        for (size_t i = 0; i < plane; i++) mask[i] = (mask[i] & INSIDE) != 0;
+        for (size_t i = 0; i < plane; i++) mask[i] = (mask[i] & VS_REL_INSIDE) != 0;
 }
 
 static void count_slab(void *arg, int worker, int bk)
@@ -207,31 +188,63 @@ static void fill_slab(void *arg, int worker, int bk)
         }
 }
 
+
+static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol,
+                             const vs_classify *c, const uint8_t *lut, int seam, vs_relevant_cache *rc,
+                             vs_relevant_cache *old);
+
 static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                       int seam, vs_relevant_cache *rc, vs_relevant_cache *old)
+                       int seam, int mode, vs_relevant_cache *rc, vs_relevant_cache *old)
 {
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
-    void *none = NULL;
-    uint8_t *mask = take(old ? (void **)&old->scratch : &none, 2 * n); /* mask + dilation scratch */
-    if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
-    uint8_t *line = mask + n;
-    build_job J = {vol, d, NULL, c, mask, {0, 0, 0}, NULL, NULL, NULL, 0};
     /* integer volumes: classify each possible value once */
     uint8_t *lut = NULL;
     if (vol->type != VS_F32) {
         const int nv = vol->type == VS_U8 ? 256 : 65536, off = vol->type == VS_I16 ? 32768 : 0;
         lut = malloc((size_t)nv);
-        if (!lut) {
-            free(mask);
-            return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
-        }
-        for (int v = 0; v < nv; v++) lut[v] = class_of(c, v - off);
-        J.lut8 = lut;
+        if (!lut) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+        for (int v = 0; v < nv; v++) lut[v] = vs_relevant_class(c, v - off);
     }
-    vs_pool_run(pool, d[2], classify_planes, &J);
+    /* the min-max per brick: the last list's if built from the same data,
+     * else made now for a large volume (a failed allocation: dense) */
+    const int all_visible = vs_relevant_in_range(c, vs_volume_base(vol)) && seam > 0;
+    const int nbm[3] = {(d[0] + VS_BRICK - 1) / VS_BRICK, (d[1] + VS_BRICK - 1) / VS_BRICK,
+                        (d[2] + VS_BRICK - 1) / VS_BRICK};
+    if (old && old->minmax && old->minmax_serial == vol->data_serial && !memcmp(old->dims, d, sizeof old->dims)) {
+        rc->minmax = old->minmax;
+        old->minmax = NULL;
+    } else if (mode == VS_RELEVANT_SPARSE || (mode == VS_RELEVANT_AUTO && n >= VS_RELEVANT_SPARSE_VOXELS)) {
+        rc->minmax = vs_relevant_minmax(pool, vol, nbm);
+    }
+    rc->minmax_serial = vol->data_serial;
+    if (rc->minmax && !all_visible && mode != VS_RELEVANT_DENSE) {
+        vs_status st = vs_relevant_build_bricks(ctx, pool, vol, c, lut, seam, mode == VS_RELEVANT_SPARSE, rc, old);
+        if (st != VS_ERR_UNSUPPORTED) {
+            free(lut);
+            return st;
+        }
+    }
+    vs_status st = build_dense(ctx, pool, vol, c, lut, seam, rc, old);
     free(lut);
-    if (in_alpha_range(c, vs_volume_base(vol)) && seam > 0) {
+    return st;
+}
+
+/* The whole grid at once: class mask, dilations, count and fill per slab
+ * of bricks. */
+static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol,
+                             const vs_classify *c, const uint8_t *lut, int seam, vs_relevant_cache *rc,
+                             vs_relevant_cache *old)
+{
+    const int *d = vol->dims;
+    size_t n = (size_t)d[0] * d[1] * d[2];
+    void *none = NULL;
+    uint8_t *mask = vs_relevant_take(old ? (void **)&old->scratch : &none, 2 * n); /* mask + dilation scratch */
+    if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    uint8_t *line = mask + n;
+    build_job J = {vol, d, lut, c, mask, {0, 0, 0}, NULL, NULL, NULL, 0};
+    vs_pool_run(pool, d[2], classify_planes, &J);
+    if (vs_relevant_in_range(c, vs_volume_base(vol)) && seam > 0) {
         /* Empty space is visible (opacity at what the volume reads
          * outside, vs_volume_base, is > 0): a voxel left out would read as
          * that and become opaque, so nothing may be left out. */
@@ -275,7 +288,7 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
         return vs_set_error(ctx, VS_ERR_TOO_LARGE, "relevant voxels: %zu voxels exceed the limit", count);
     }
     for (size_t b = 0; b < nbt; b++) nonempty += pos[b] != 0;
-    vs_voxel *vox = old ? take((void **)&old->voxels, count * sizeof *vox) : malloc((count ? count : 1) * sizeof *vox);
+    vs_voxel *vox = old ? vs_relevant_take((void **)&old->voxels, count * sizeof *vox) : malloc((count ? count : 1) * sizeof *vox);
     vs_brick *bricks = malloc((nonempty ? nonempty : 1) * sizeof *bricks);
     if (!vox || !bricks) {
         free(mask);
@@ -294,15 +307,7 @@ static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_vo
                 uint32_t nvox = pos[b];
                 pos[b] = run;
                 if (nvox) {
-                    vs_brick *br = &bricks[nbk++];
-                    br->start = run;
-                    br->count = nvox;
-                    br->i0 = (uint16_t)(bi * VS_BRICK);
-                    br->j0 = (uint16_t)(bj * VS_BRICK);
-                    br->k0 = (uint16_t)(bk * VS_BRICK);
-                    br->i1 = (uint16_t)((bi + 1) * VS_BRICK > d[0] ? d[0] - 1 : (bi + 1) * VS_BRICK - 1);
-                    br->j1 = (uint16_t)((bj + 1) * VS_BRICK > d[1] ? d[1] - 1 : (bj + 1) * VS_BRICK - 1);
-                    br->k1 = (uint16_t)((bk + 1) * VS_BRICK > d[2] ? d[2] - 1 : (bk + 1) * VS_BRICK - 1);
+                    bricks[nbk++] = vs_relevant_brick(d, bi, bj, bk, run, nvox);
                 }
                 run += nvox;
             }
@@ -328,6 +333,13 @@ vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_p
                           const struct vs_volume *vol, const vs_classify *c, int seam, const vs_relevant_cache **out,
                           int *rebuilt)
 {
+    return vs_relevant_get_mode(ctx, slot, pool, vol, c, seam, VS_RELEVANT_AUTO, out, rebuilt);
+}
+
+vs_status vs_relevant_get_mode(vs_context *ctx, vs_relevant_cache **slot, struct vs_pool *pool,
+                               const struct vs_volume *vol, const vs_classify *c, int seam, int mode,
+                               const vs_relevant_cache **out, int *rebuilt)
+{
     vs_relevant_cache *rc = *slot;
     *rebuilt = 0;
     if (rc && rc->vol == vol && rc->serial == vol->serial && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
@@ -344,7 +356,7 @@ vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_p
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     }
     double t0 = vs_now_ms();
-    vs_status st = build(ctx, pool, vol, c, seam, rc, old);
+    vs_status st = build(ctx, pool, vol, c, seam, mode, rc, old);
     vs_relevant_cache_free(old); /* what build did not take over */
     if (st != VS_OK) {
         vs_relevant_cache_free(rc);
@@ -365,4 +377,4 @@ vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_p
     return VS_OK;
 }
 
-int vs_classify_value_visible(const vs_classify *c, double v) { return in_alpha_range(c, v); }
+int vs_classify_value_visible(const vs_classify *c, double v) { return vs_relevant_in_range(c, v); }

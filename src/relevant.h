@@ -44,6 +44,13 @@ typedef struct vs_relevant_cache {
     vs_brick *bricks;      /* non-empty bricks only                     */
     uint8_t *scratch;      /* 2 bytes per grid voxel, kept for rebuilds up
                               to VS_RELEVANT_KEEP_SCRATCH bytes */
+    /* per brick of the grid, the least and greatest finite value (an empty
+     * brick: +inf, -inf), built once per data (data_serial) and handed from
+     * list to list: a rebuild then visits only the bricks the
+     * classification can reach */
+    float *minmax;
+    uint64_t minmax_serial;
+    int sparse;            /* this list was built brick by brick             */
     double build_ms;
 } vs_relevant_cache;
 
@@ -56,6 +63,14 @@ struct vs_pool;
 vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_pool *pool,
                           const struct vs_volume *vol, const vs_classify *c, int seam, const vs_relevant_cache **out,
                           int *rebuilt);
+/* How a rebuild finds the voxels: VS_RELEVANT_AUTO (vs_relevant_get's
+ * choice: brick by brick when the volume is large and the bricks the
+ * classification can reach are few), or forced, for tests: both give the
+ * same list. */
+enum { VS_RELEVANT_AUTO, VS_RELEVANT_DENSE, VS_RELEVANT_SPARSE };
+vs_status vs_relevant_get_mode(vs_context *ctx, vs_relevant_cache **slot, struct vs_pool *pool,
+                               const struct vs_volume *vol, const vs_classify *c, int seam, int mode,
+                               const vs_relevant_cache **out, int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
 /* Does the classification give value v a non-zero opacity?  With v what
  * the volume reads outside (vs_volume_base), every voxel is relevant and

@@ -156,16 +156,42 @@ void vs_volume_range(const vs_volume *v, double *lo, double *hi)
     if (hi) *hi = v ? v->vmax : 0.0;
 }
 
+/* The least and greatest of n integers of type T (a loop the compiler
+ * vectorises). */
+#define INT_RANGE(T)                                                                                               \
+    do {                                                                                                           \
+        const T *p = v->data;                                                                                      \
+        T a = p[0], b = p[0];                                                                                      \
+        for (size_t i = 1; i < n; i++) {                                                                           \
+            a = p[i] < a ? p[i] : a;                                                                               \
+            b = p[i] > b ? p[i] : b;                                                                               \
+        }                                                                                                          \
+        lo = a;                                                                                                    \
+        hi = b;                                                                                                    \
+    } while (0)
+
 void vs_volume_update_range(vs_volume *v)
 {
     if (!v) return;
     size_t n = (size_t)v->dims[0] * v->dims[1] * v->dims[2];
     double lo = DBL_MAX, hi = -DBL_MAX;
-    for (size_t i = 0; i < n; i++) {
-        double x = vs_volume_at(v, i);
-        if (!isfinite(x)) continue;
-        if (x < lo) lo = x;
-        if (x > hi) hi = x;
+    switch (v->type) {
+    case VS_U8: INT_RANGE(uint8_t); break;
+    case VS_I16: INT_RANGE(int16_t); break;
+    case VS_U16: INT_RANGE(uint16_t); break;
+    default: {
+        const float *p = v->data;
+        float a = FLT_MAX, b = -FLT_MAX;
+        for (size_t i = 0; i < n; i++) {
+            if (!isfinite(p[i])) continue;
+            a = p[i] < a ? p[i] : a;
+            b = p[i] > b ? p[i] : b;
+        }
+        if (a <= b) {
+            lo = a;
+            hi = b;
+        }
+    } break;
     }
     if (lo > hi) lo = hi = 0.0; /* no finite value at all */
     v->vmin = lo;

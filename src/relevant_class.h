@@ -1,0 +1,56 @@
+/* What the two builds of the relevant-voxel list share (relevant.c, the
+ * whole grid at once; relevant_bricks.c, brick by brick): the class of a
+ * value against the opacity range, and buffer reuse. */
+#ifndef VS_RELEVANT_CLASS_H
+#define VS_RELEVANT_CLASS_H
+
+#include "classify.h"
+#include "relevant.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static inline int vs_relevant_in_range(const vs_classify *c, double v)
+{
+    /* opacity is non-zero strictly inside (alpha_lo, alpha_hi) for ramps and
+     * on the closed range for hard thresholds */
+    if (!isfinite(v)) return 0;
+    if (c->ramp > 0 || c->use_points) return v > c->alpha_lo && v < c->alpha_hi;
+    return v >= c->alpha_lo && v <= c->alpha_hi;
+}
+
+/* A voxel's class: below the range, inside it, above it, or non-finite (0). */
+enum { VS_REL_BELOW = 1, VS_REL_INSIDE = 2, VS_REL_ABOVE = 4 };
+static inline uint8_t vs_relevant_class(const vs_classify *c, double v)
+{
+    if (vs_relevant_in_range(c, v)) return VS_REL_INSIDE;
+    if (!isfinite(v)) return 0;
+    return v <= c->alpha_lo ? VS_REL_BELOW : VS_REL_ABOVE;
+}
+
+/* Buffers of the previous list are reused (realloc) so that changing the
+ * iso-range does not pay for fresh, page-faulting allocations each time. */
+static inline void *vs_relevant_take(void **old, size_t bytes)
+{
+    void *p = realloc(*old, bytes ? bytes : 1);
+    if (p) *old = NULL;
+    return p;
+}
+
+/* Brick (bi, bj, bk) of a grid of dims d, holding count voxels from slot
+ * start of the list. */
+static inline vs_brick vs_relevant_brick(const int d[3], int bi, int bj, int bk, uint32_t start, uint32_t count)
+{
+    vs_brick br;
+    br.start = start;
+    br.count = count;
+    br.i0 = (uint16_t)(bi * VS_BRICK);
+    br.j0 = (uint16_t)(bj * VS_BRICK);
+    br.k0 = (uint16_t)(bk * VS_BRICK);
+    br.i1 = (uint16_t)((bi + 1) * VS_BRICK > d[0] ? d[0] - 1 : (bi + 1) * VS_BRICK - 1);
+    br.j1 = (uint16_t)((bj + 1) * VS_BRICK > d[1] ? d[1] - 1 : (bj + 1) * VS_BRICK - 1);
+    br.k1 = (uint16_t)((bk + 1) * VS_BRICK > d[2] ? d[2] - 1 : (bk + 1) * VS_BRICK - 1);
+    return br;
+}
+
+#endif
