@@ -57,7 +57,8 @@ typedef enum vs_status {
     VS_ERR_IO = 2,               /* file cannot be opened, read or written */
     VS_ERR_FORMAT = 3,           /* file is truncated, malformed or unsupported */
     VS_ERR_OUT_OF_MEMORY = 4,
-    VS_ERR_TOO_LARGE = 5,        /* sizes overflow or exceed VS_MAX_* limits */
+    VS_ERR_TOO_LARGE = 5,        /* sizes overflow, exceed VS_MAX_* limits, or need
+                                    more memory than the process may take */
     VS_ERR_UNSUPPORTED = 6,      /* valid request this build cannot serve */
     VS_ERR_CANCELLED = 7,        /* the progress callback asked to stop */
     VS_ERR_INTERNAL = 8,

@@ -6,8 +6,10 @@
 #include <float.h>
 #include <stdatomic.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 static atomic_uint_fast64_t volume_serial;
 
@@ -69,6 +71,39 @@ vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3]
     return VS_OK;
 }
 
+/* The memory this process can still take: the kernel's estimate of what
+ * can be allocated without swapping (MemAvailable), capped by the
+ * address-space and data limits (ulimit -v, -d, which cluster schedulers
+ * set).  *what names the bound; 0 when none can be read. */
+static uint64_t memory_available(const char **what)
+{
+    uint64_t avail = 0;
+    *what = "";
+    FILE *f = fopen("/proc/meminfo", "r");
+    if (f) {
+        char line[256];
+        unsigned long long kb;
+        while (fgets(line, sizeof line, f))
+            if (sscanf(line, "MemAvailable: %llu kB", &kb) == 1) {
+                avail = (uint64_t)kb * 1024u;
+                *what = "memory available";
+                break;
+            }
+        fclose(f);
+    }
+    static const struct { int res; const char *name; } limits[] = {{RLIMIT_AS, "address-space limit"},
+                                                                   {RLIMIT_DATA, "data-size limit"}};
+    for (size_t i = 0; i < sizeof limits / sizeof limits[0]; i++) {
+        struct rlimit rl;
+        if (getrlimit(limits[i].res, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY &&
+            (avail == 0 || (uint64_t)rl.rlim_cur < avail)) {
+            avail = (uint64_t)rl.rlim_cur;
+            *what = limits[i].name;
+        }
+    }
+    return avail;
+}
+
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out)
 {
@@ -76,6 +111,18 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
     if (st != VS_OK) return st;
     struct vs_volume *v = *out;
     const size_t n = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
+    /* Refused up front, with what it needs: Linux overcommits, so a volume
+     * larger than memory would be allocated and the process killed while
+     * the file is read into it. */
+    const char *bound;
+    const uint64_t need = (uint64_t)n * vs_type_size(type), avail = memory_available(&bound);
+    if (avail && need > avail) {
+        free(v);
+        *out = NULL;
+        return vs_set_error(ctx, VS_ERR_TOO_LARGE,
+                            "volume of %dx%dx%d %s voxels needs %.2f GB, more than the %.2f GB of the %s",
+                            dims[0], dims[1], dims[2], vs_type_name(type), need / 1e9, avail / 1e9, bound);
+    }
     v->data = calloc(n, vs_type_size(type));
     if (!v->data) {
         free(v);

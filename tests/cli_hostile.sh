@@ -4,7 +4,8 @@
 # overflows, zero / negative / NaN spacing, unwritable outputs.  Each must
 # exit 1 with one "vsplat: " line naming the file, leave no output file,
 # finish within 10 s, and run under ulimit -v 2 GB (nothing absurd is
-# allocated; skipped in sanitizer builds, which reserve terabytes of shadow
+# allocated, and a volume the limit cannot hold is refused with what it
+# needs; skipped in sanitizer builds, which reserve terabytes of shadow
 # memory: VSPLAT_SANITIZED=1).  Non-finite voxels load and render (exit 0,
 # with a note), and an iso-range outside the data gives a blank image
 # (exit 0, with a note).
@@ -104,6 +105,19 @@ nifti "$IN/overflow.nii" 32767 32767 32767 64 64 $F1 $F1 $F1 $F352 64
 expect_fail "NIfTI 32767^3 f64 (2^48 bytes)" overflow.nii render "$IN/overflow.nii" -o out.png
 nifti "$IN/big.nii" 4096 4096 4096 16 32 $F1 $F1 $F1 $F352 64
 expect_fail "NIfTI 4096^3 f32 over 64 bytes" big.nii info "$IN/big.nii"
+if [[ -n $LIMIT ]]; then
+    # a well-formed 4.3 GB volume (a sparse file) under the 2 GB limit: refused
+    # before anything is allocated, saying what it needs (without the check,
+    # calloc fails: exit 2 "cannot allocate"; without the limit, Linux would
+    # overcommit and the process be killed while reading)
+    nifti "$IN/huge.nii" 2048 2048 1024 2 8 $F1 $F1 $F1 $F352 64
+    truncate -s $((352 + 2048 * 2048 * 1024)) "$IN/huge.nii"
+    expect_fail "NIfTI 4.3 GB under ulimit -v 2 GB" huge.nii info "$IN/huge.nii"
+    if grep -q 'needs 4.29 GB, more than the 2.15 GB of the address-space limit' "$T/err"; then ok; else
+        bad "4.3 GB volume: the message does not say what it needs: $(cat "$T/err")"
+    fi
+    rm -f "$IN/huge.nii"
+fi
 nifti "$IN/negative_dim.nii" 4 -4 4 2 8 $F1 $F1 $F1 $F352 64
 expect_fail "NIfTI dim[2] = -4" negative_dim.nii render "$IN/negative_dim.nii" -o out.png
 nifti "$IN/complex.nii" 4 4 4 32 64 $F1 $F1 $F1 $F352 512
