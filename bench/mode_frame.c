@@ -85,6 +85,7 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
         return st == VS_ERR_OUT_OF_MEMORY || st == VS_ERR_INTERNAL ? 2 : 1;
     }
 
+    cli_settle_view(&o, vol); /* the frames turn from the first one's view */
     vs_settings s = o.s;
     vs_image img = {0, 0, NULL};
     vs_stats first;

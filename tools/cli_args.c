@@ -529,6 +529,14 @@ int cli_parse_info(int argc, char **argv, cli_opts *o, char *err, size_t errcap)
     return parse_common(argc, argv, o, 1, err, errcap);
 }
 
+void cli_settle_view(cli_opts *o, const vs_volume *vol)
+{
+    if (o->s.view != VS_VIEW_AUTO) return;
+    double m[12];
+    o->s.view = vs_volume_affine(vol, m) && o->s.azimuth == 0.0 && o->s.elevation == 0.0 ? VS_VIEW_ANTERIOR
+                                                                                          : VS_VIEW_ANGLES;
+}
+
 const char *cli_output_format(const char *path)
 {
     if (!path) return NULL;

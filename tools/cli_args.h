@@ -41,6 +41,12 @@ int cli_parse_info(int argc, char **argv, cli_opts *o, char *err, size_t errcap)
  * Returns 0, or 1 if it does not fit in cap. */
 int cli_frame_name(const char *out, int frame, char *buf, size_t cap);
 
+/* The default view (VS_VIEW_AUTO) made explicit for this volume: the
+ * front when it has an orientation, else the angles.  Tools that turn the
+ * azimuth from it (turntables, vsplat-bench frame) settle it once first, so
+ * that frame 1 turns from frame 0's view, not from the back. */
+void cli_settle_view(cli_opts *o, const vs_volume *vol);
+
 /* Output format from the extension (.png, .exr, .tif, .tiff, .gif; any
  * case): returns a short name ("png", "exr", "tiff", "gif") or NULL. */
 const char *cli_output_format(const char *path);

@@ -407,7 +407,8 @@ static int run(int rank, int n, int argc, char **argv)
             P.ramp = o.s.ramp;
             P.tf_count = o.s.tf_count;
             P.oriented = vs_volume_affine(full, P.affine); /* rank 0's slab starts at z = 0 */
-            P.view = o.s.view == VS_VIEW_AUTO ? (P.oriented ? VS_VIEW_ANTERIOR : VS_VIEW_ANGLES) : o.s.view;
+            cli_settle_view(&o, full);
+            P.view = o.s.view;
         }
     } else if (rank == 0) {
         if (o.tf_path) {

@@ -441,10 +441,7 @@ static int cmd_render(int argc, char **argv)
 
     if (!o.quiet) geometry_notes(&o, vol);
     /* the default view, fixed before a turntable turns the azimuth from it */
-    if (o.s.view == VS_VIEW_AUTO) {
-        double m[12];
-        o.s.view = vs_volume_affine(vol, m) ? VS_VIEW_ANTERIOR : VS_VIEW_ANGLES;
-    }
+    cli_settle_view(&o, vol);
 
     /* --tf: the .1dt format needs the volume's value range, so load it now. */
     vs_tf_point *tf = NULL;
