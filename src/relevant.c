@@ -23,7 +23,6 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
     free(rc);
 }
 
-
 /* OR-dilate a byte mask of flag bits by r voxels in a box (separable: one
  * pass per axis).  Each pass ORs whole contiguous runs — rows for x, rows of
  * neighbouring rows for y, planes of neighbouring planes for z — so the
@@ -93,8 +92,6 @@ static void dilate(struct vs_pool *pool, uint8_t *m, const int d[3], int r, uint
     vs_pool_run(pool, d[2], copy_plane, &J);
     vs_pool_run(pool, d[2], dilate_z, &J);
 }
-
-
 
 /* The per-voxel passes of a rebuild, on the pool: classification and the
  * in-range test in chunks of planes; counting and filling per slab of
@@ -188,53 +185,11 @@ static void fill_slab(void *arg, int worker, int bk)
         }
 }
 
-
-static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol,
-                             const vs_classify *c, const uint8_t *lut, int seam, vs_relevant_cache *rc,
-                             vs_relevant_cache *old);
-
-static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
-                       int seam, int mode, vs_relevant_cache *rc, vs_relevant_cache *old)
-{
-    const int *d = vol->dims;
-    size_t n = (size_t)d[0] * d[1] * d[2];
-    /* integer volumes: classify each possible value once */
-    uint8_t *lut = NULL;
-    if (vol->type != VS_F32) {
-        const int nv = vol->type == VS_U8 ? 256 : 65536, off = vol->type == VS_I16 ? 32768 : 0;
-        lut = malloc((size_t)nv);
-        if (!lut) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
-        for (int v = 0; v < nv; v++) lut[v] = vs_relevant_class(c, v - off);
-    }
-    /* the min-max per brick: the last list's if built from the same data,
-     * else made now for a large volume (a failed allocation: dense) */
-    const int all_visible = vs_relevant_in_range(c, vs_volume_base(vol)) && seam > 0;
-    const int nbm[3] = {(d[0] + VS_BRICK - 1) / VS_BRICK, (d[1] + VS_BRICK - 1) / VS_BRICK,
-                        (d[2] + VS_BRICK - 1) / VS_BRICK};
-    if (old && old->minmax && old->minmax_serial == vol->data_serial && !memcmp(old->dims, d, sizeof old->dims)) {
-        rc->minmax = old->minmax;
-        old->minmax = NULL;
-    } else if (mode == VS_RELEVANT_SPARSE || (mode == VS_RELEVANT_AUTO && n >= VS_RELEVANT_SPARSE_VOXELS)) {
-        rc->minmax = vs_relevant_minmax(pool, vol, nbm);
-    }
-    rc->minmax_serial = vol->data_serial;
-    if (rc->minmax && !all_visible && mode != VS_RELEVANT_DENSE) {
-        vs_status st = vs_relevant_build_bricks(ctx, pool, vol, c, lut, seam, mode == VS_RELEVANT_SPARSE, rc, old);
-        if (st != VS_ERR_UNSUPPORTED) {
-            free(lut);
-            return st;
-        }
-    }
-    vs_status st = build_dense(ctx, pool, vol, c, lut, seam, rc, old);
-    free(lut);
-    return st;
-}
-
 /* The whole grid at once: class mask, dilations, count and fill per slab
  * of bricks. */
 static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol,
-                             const vs_classify *c, const uint8_t *lut, int seam, vs_relevant_cache *rc,
-                             vs_relevant_cache *old)
+                             const vs_classify *c, const uint8_t *lut, int seam, int all_visible,
+                             vs_relevant_cache *rc, vs_relevant_cache *old)
 {
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
@@ -243,13 +198,13 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
     uint8_t *line = mask + n;
     build_job J = {vol, d, lut, c, mask, {0, 0, 0}, NULL, NULL, NULL, 0};
-    vs_pool_run(pool, d[2], classify_planes, &J);
-    if (vs_relevant_in_range(c, vs_volume_base(vol)) && seam > 0) {
+    if (all_visible) {
         /* Empty space is visible (opacity at what the volume reads
          * outside, vs_volume_base, is > 0): a voxel left out would read as
          * that and become opaque, so nothing may be left out. */
         memset(mask, 1, n);
     } else if (seam > 0) {
+        vs_pool_run(pool, d[2], classify_planes, &J);
         /* Post-classified pipelines: the iso-range is met between voxels
          * wherever a voxel's 3x3x3 neighbourhood holds a value inside the
          * range or values on both sides of it (a thin ramp can fall between
@@ -260,13 +215,13 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
         vs_pool_run(pool, d[2], finish_planes, &J);
         dilate(pool, mask, d, seam, line);
     } else {
+        vs_pool_run(pool, d[2], classify_planes, &J);
         vs_pool_run(pool, d[2], finish_planes, &J);
     }
     /* Compact brick by brick: count per brick, prefix sums, fill (the fill
      * walks the grid in k, j, i order, so each brick is in that order too). */
-    const int nb[3] = {(d[0] + VS_BRICK - 1) / VS_BRICK, (d[1] + VS_BRICK - 1) / VS_BRICK,
-                       (d[2] + VS_BRICK - 1) / VS_BRICK};
-    size_t nbt = (size_t)nb[0] * nb[1] * nb[2];
+    int nb[3];
+    const size_t nbt = vs_relevant_grid(d, nb);
     uint32_t *pos = calloc(nbt + 1, sizeof *pos);
     size_t *slab_count = calloc((size_t)nb[2], sizeof *slab_count);
     if (!pos || !slab_count) {
@@ -327,6 +282,41 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     rc->count = count;
     rc->voxels = vox;
     return VS_OK;
+}
+
+static vs_status build(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol, const vs_classify *c,
+                       int seam, int mode, vs_relevant_cache *rc, vs_relevant_cache *old)
+{
+    const int *d = vol->dims;
+    size_t n = (size_t)d[0] * d[1] * d[2];
+    /* integer volumes: classify each possible value once */
+    uint8_t *lut = NULL;
+    if (vol->type != VS_F32) {
+        const int nv = vol->type == VS_U8 ? 256 : 65536, off = vol->type == VS_I16 ? 32768 : 0;
+        lut = malloc((size_t)nv);
+        if (!lut) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+        for (int v = 0; v < nv; v++) lut[v] = vs_relevant_class(c, v - off);
+    }
+    /* the min-max per brick: the last list's if built from the same data,
+     * else made now for a large volume (a failed allocation: dense) */
+    const int all_visible = vs_relevant_in_range(c, vs_volume_base(vol)) && seam > 0;
+    if (old && old->minmax && old->minmax_serial == vol->data_serial && !memcmp(old->dims, d, sizeof old->dims)) {
+        rc->minmax = old->minmax;
+        old->minmax = NULL;
+    } else if (mode == VS_RELEVANT_SPARSE || (mode == VS_RELEVANT_AUTO && n >= VS_RELEVANT_SPARSE_VOXELS)) {
+        rc->minmax = vs_relevant_minmax(pool, vol);
+    }
+    rc->minmax_serial = vol->data_serial;
+    if (rc->minmax && !all_visible && mode != VS_RELEVANT_DENSE) {
+        vs_status st = vs_relevant_build_bricks(ctx, pool, vol, c, lut, seam, mode == VS_RELEVANT_SPARSE, rc, old);
+        if (st != VS_ERR_UNSUPPORTED) {
+            free(lut);
+            return st;
+        }
+    }
+    vs_status st = build_dense(ctx, pool, vol, c, lut, seam, all_visible, rc, old);
+    free(lut);
+    return st;
 }
 
 vs_status vs_relevant_get(vs_context *ctx, vs_relevant_cache **slot, struct vs_pool *pool,

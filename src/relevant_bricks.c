@@ -11,6 +11,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The first voxel of brick b (linear in k, j, i order) of a grid of nb bricks. */
+static void brick_origin(uint32_t b, const int nb[3], int o[3])
+{
+    o[0] = (int)(b % (uint32_t)nb[0]) * VS_BRICK;
+    o[1] = (int)(b / (uint32_t)nb[0] % (uint32_t)nb[1]) * VS_BRICK;
+    o[2] = (int)(b / ((uint32_t)nb[0] * (uint32_t)nb[1])) * VS_BRICK;
+}
 
 typedef struct minmax_job {
     const struct vs_volume *vol;
@@ -80,12 +87,13 @@ static void minmax_slab(void *arg, int worker, int bk)
     free(cols);
 }
 
-float *vs_relevant_minmax(struct vs_pool *pool, const struct vs_volume *vol, const int nb[3])
+float *vs_relevant_minmax(struct vs_pool *pool, const struct vs_volume *vol)
 {
-    float *mm = malloc(2 * (size_t)nb[0] * nb[1] * nb[2] * sizeof *mm);
+    minmax_job J = {vol, {0, 0, 0}, NULL};
+    float *mm = malloc(2 * vs_relevant_grid(vol->dims, J.nb) * sizeof *mm);
     if (!mm) return NULL;
-    minmax_job J = {vol, {nb[0], nb[1], nb[2]}, mm};
-    vs_pool_run(pool, nb[2], minmax_slab, &J);
+    J.mm = mm;
+    vs_pool_run(pool, J.nb[2], minmax_slab, &J);
     return mm;
 }
 
@@ -183,8 +191,22 @@ typedef struct sparse_job {
     size_t per_worker;
 } sparse_job;
 
+/* OR each of the n bit rows with the rows within r of it along one axis
+ * of the block: `count` rows `step` apart on that axis. */
+static void dilate_rows(uint64_t *m, uint64_t *tmp, int n, int count, int step, int r)
+{
+    memcpy(tmp, m, (size_t)n * sizeof *m);
+    for (int i = 0; i < n; i++) {
+        const int c = i / step % count;
+        uint64_t x = 0;
+        for (int t = c - r < 0 ? -c : -r; t <= r && c + t < count; t++) x |= tmp[i + t * step];
+        m[i] = x;
+    }
+}
+
 /* OR-dilate a block of bit rows (w bits, bh rows a plane, bd planes) by r
- * voxels in a box, separably; tmp holds a copy. */
+ * voxels in a box, separably: shifts within the rows, then across rows in
+ * y and in z; tmp holds a copy. */
 static void dilate_bits(uint64_t *m, uint64_t *tmp, int w, int bh, int bd, int r, uint64_t all)
 {
     const int n = bh * bd;
@@ -193,20 +215,8 @@ static void dilate_bits(uint64_t *m, uint64_t *tmp, int w, int bh, int bd, int r
         for (int s = 0; s < r && s < w; s++) x |= (x << 1 | x >> 1) & all;
         m[i] = x;
     }
-    memcpy(tmp, m, (size_t)n * sizeof *m);
-    for (int k = 0; k < bd; k++)
-        for (int j = 0; j < bh; j++) {
-            uint64_t x = 0;
-            for (int jj = j - r < 0 ? 0 : j - r; jj <= j + r && jj < bh; jj++) x |= tmp[k * bh + jj];
-            m[k * bh + j] = x;
-        }
-    memcpy(tmp, m, (size_t)n * sizeof *m);
-    for (int k = 0; k < bd; k++)
-        for (int j = 0; j < bh; j++) {
-            uint64_t x = 0;
-            for (int kk = k - r < 0 ? 0 : k - r; kk <= k + r && kk < bd; kk++) x |= tmp[kk * bh + j];
-            m[k * bh + j] = x;
-        }
+    dilate_rows(m, tmp, n, bh, 1, r);
+    dilate_rows(m, tmp, n, bd, bh, r);
 }
 
 /* A block row's classes as three words of bits (ri, rb, ra). */
@@ -232,10 +242,9 @@ static void sparse_run(void *arg, int worker, int task)
     const sparse_job *J = arg;
     const int *d = J->vol->dims, *nb = J->nb;
     const brick_run run = J->runs[task];
-    const uint32_t b = J->list[run.t0];
-    const int bi = (int)(b % (uint32_t)nb[0]), bj = (int)(b / (uint32_t)nb[0] % (uint32_t)nb[1]),
-              bk = (int)(b / ((uint32_t)nb[0] * (uint32_t)nb[1]));
-    const int h = J->seam > 0 ? J->seam + 1 : 0, o[3] = {bi * VS_BRICK, bj * VS_BRICK, bk * VS_BRICK};
+    const int h = J->seam > 0 ? J->seam + 1 : 0;
+    int o[3];
+    brick_origin(J->list[run.t0], nb, o);
     const int len[3] = {VS_BRICK * (int)run.n, VS_BRICK, VS_BRICK};
     int lo[3], hi[3], e[3];
     for (int a = 0; a < 3; a++) {
@@ -319,10 +328,8 @@ static void compact_chunk(void *arg, int worker, int task)
         if (!S->counts[t]) continue;
         vs_voxel *out = C->vox + C->start[t];
         if (S->full[t]) {
-            const uint32_t b = S->list[t];
-            const int o[3] = {(int)(b % (uint32_t)nb[0]) * VS_BRICK, (int)(b / (uint32_t)nb[0] % (uint32_t)nb[1]) * VS_BRICK,
-                              (int)(b / ((uint32_t)nb[0] * (uint32_t)nb[1])) * VS_BRICK};
-            int e[3];
+            int o[3], e[3];
+            brick_origin(S->list[t], nb, o);
             for (int a = 0; a < 3; a++) e[a] = o[a] + VS_BRICK < d[a] ? VS_BRICK : d[a] - o[a];
             for (int k = 0; k < e[2]; k++)
                 for (int j = 0; j < e[1]; j++)
@@ -362,10 +369,9 @@ static vs_status compact_sparse(vs_context *ctx, struct vs_pool *pool, const spa
     for (size_t t = 0; t < nreg; t++) {
         start[t] = run;
         if (!S->counts[t]) continue;
-        const uint32_t b = S->list[t];
-        const int bi = (int)(b % (uint32_t)nb[0]), bj = (int)(b / (uint32_t)nb[0] % (uint32_t)nb[1]),
-                  bk = (int)(b / ((uint32_t)nb[0] * (uint32_t)nb[1]));
-        bricks[nbk++] = vs_relevant_brick(d, bi, bj, bk, run, S->counts[t]);
+        int o[3];
+        brick_origin(S->list[t], nb, o);
+        bricks[nbk++] = vs_relevant_brick(d, o[0] / VS_BRICK, o[1] / VS_BRICK, o[2] / VS_BRICK, run, S->counts[t]);
         run += S->counts[t];
     }
     compact_job C = {S, start, vox, nreg};
@@ -385,9 +391,8 @@ vs_status vs_relevant_build_bricks(vs_context *ctx, struct vs_pool *pool, const 
 {
     const int *d = vol->dims;
     const size_t n = (size_t)d[0] * d[1] * d[2];
-    const int nb[3] = {(d[0] + VS_BRICK - 1) / VS_BRICK, (d[1] + VS_BRICK - 1) / VS_BRICK,
-                       (d[2] + VS_BRICK - 1) / VS_BRICK};
-    const size_t nbt = (size_t)nb[0] * nb[1] * nb[2];
+    int nb[3];
+    const size_t nbt = vs_relevant_grid(d, nb);
     uint8_t *flags = malloc(3 * nbt);
     uint32_t *list = malloc(nbt * sizeof *list);
     if (!flags || !list) {

@@ -10,10 +10,10 @@ struct vs_pool;
  * the whole grid is as fast: 33.7 M u8 voxels, 76 ms against 82). */
 #define VS_RELEVANT_SPARSE_VOXELS ((size_t)1 << 26)
 
-/* Per brick of nb[0] x nb[1] x nb[2] (VS_BRICK^3 cells), the least and
+/* Per brick of the volume's grid (vs_relevant_grid), the least and
  * greatest finite value, 2 floats each (a brick holding a NaN: least
  * -inf); NULL when out of memory. */
-float *vs_relevant_minmax(struct vs_pool *pool, const struct vs_volume *vol, const int nb[3]);
+float *vs_relevant_minmax(struct vs_pool *pool, const struct vs_volume *vol);
 /* The list into rc from rc->minmax: VS_OK; an error status; or
  * VS_ERR_UNSUPPORTED (nothing set) when the reached bricks would cost more
  * than about two passes over the grid, unless forced.  lut: the class of

@@ -37,6 +37,13 @@ static inline void *vs_relevant_take(void **old, size_t bytes)
     return p;
 }
 
+/* The grid of VS_BRICK^3 bricks over dims d: nb per axis; returns them all. */
+static inline size_t vs_relevant_grid(const int d[3], int nb[3])
+{
+    for (int a = 0; a < 3; a++) nb[a] = (d[a] + VS_BRICK - 1) / VS_BRICK;
+    return (size_t)nb[0] * nb[1] * nb[2];
+}
+
 /* Brick (bi, bj, bk) of a grid of dims d, holding count voxels from slot
  * start of the list. */
 static inline vs_brick vs_relevant_brick(const int d[3], int bi, int bj, int bk, uint32_t start, uint32_t count)
