@@ -77,12 +77,24 @@ static int parse_name_dims(const char *path, int dims[3], vs_type *type, vs_endi
     return found;
 }
 
+/* The name ends with one of the n suffixes (any case). */
+static int ends_with_any(const char *path, const char *const *ext, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (vs_load_ends_with(path, ext[i])) return 1;
+    return 0;
+}
+
+static int is_nifti_name(const char *path)
+{
+    static const char *const ext[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz"};
+    return ends_with_any(path, ext, sizeof ext / sizeof ext[0]);
+}
+
 static int is_raw_name(const char *path)
 {
     static const char *const ext[] = {".raw", ".raw.gz", ".bin", ".bin.gz", ".vol", ".vol.gz"};
-    for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++)
-        if (vs_load_ends_with(path, ext[i])) return 1;
-    return 0;
+    return ends_with_any(path, ext, sizeof ext / sizeof ext[0]);
 }
 
 static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_options *opt,
@@ -95,9 +107,7 @@ static vs_status dispatch(vs_context *ctx, const char *path, const vs_load_optio
         return vs_dicom_folder(path) ? vs_load_dicom(ctx, path, opt->series, out) : vs_load_folder(ctx, path, out);
     if (opt->raw) return vs_load_raw(ctx, path, opt->dims, opt->type, opt->endian, NULL, out);
 
-    static const char *const nifti[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz"};
-    for (size_t i = 0; i < sizeof nifti / sizeof nifti[0]; i++)
-        if (vs_load_ends_with(path, nifti[i])) return vs_load_nifti(ctx, path, NULL, out);
+    if (is_nifti_name(path)) return vs_load_nifti(ctx, path, NULL, out);
     if (vs_load_ends_with(path, ".nrrd") || vs_load_ends_with(path, ".nhdr"))
         return vs_load_nrrd(ctx, path, out);
     if (vs_load_ends_with(path, ".den")) return vs_load_den(ctx, path, out);
@@ -137,9 +147,7 @@ static vs_status dispatch_box(vs_context *ctx, const char *path, const vs_load_o
     if (stat(path, &st) != 0)
         return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     if (opt->raw) return vs_load_raw(ctx, path, opt->dims, opt->type, opt->endian, box, out);
-    static const char *const nifti[] = {".nii", ".nii.gz", ".hdr", ".img", ".hdr.gz", ".img.gz"};
-    for (size_t i = 0; i < sizeof nifti / sizeof nifti[0]; i++)
-        if (vs_load_ends_with(path, nifti[i])) return vs_load_nifti(ctx, path, box, out);
+    if (is_nifti_name(path)) return vs_load_nifti(ctx, path, box, out);
     int dims[3];
     vs_type type;
     vs_endian endian;

@@ -9,7 +9,6 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 
 vs_status vs_load_file_size(vs_context *ctx, const char *path, uint64_t *size)
 {
@@ -68,6 +67,18 @@ vs_status vs_load_alloc(vs_context *ctx, const char *path, vs_type type, const i
     return st;
 }
 
+uint64_t vs_load_gzread(gzFile gz, void *dst, uint64_t n)
+{
+    unsigned char *p = dst;
+    uint64_t got = 0;
+    while (got < n) {
+        const uint64_t left = n - got;
+        const int r = gzread(gz, p + got, left > (1u << 26) ? 1u << 26 : (unsigned)left);
+        if (r <= 0) break;
+        got += (uint64_t)r;
+    }
+    return got;
+}
 
 vs_status vs_load_check_box(vs_context *ctx, const char *path, const vs_load_box *box, const int dims[3])
 {
@@ -118,13 +129,7 @@ vs_status vs_load_read_box(vs_context *ctx, const char *path, const char *file, 
                     got += (uint64_t)r;
                 }
             else if (gzseek(gz, (z_off_t)at, SEEK_SET) == (z_off_t)at)
-                while (got < run) {
-                    uint64_t left = run - got;
-                    unsigned piece = left > (1u << 26) ? (1u << 26) : (unsigned)left;
-                    int r = gzread(gz, p + got, piece);
-                    if (r <= 0) break;
-                    got += (uint64_t)r;
-                }
+                got = vs_load_gzread(gz, p, run);
             if (got < run) {
                 int zerr = Z_OK;
                 const char *msg = gz ? gzerror(gz, &zerr) : "";

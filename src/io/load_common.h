@@ -5,6 +5,7 @@
 #include "volume.h"
 
 #include <stdint.h>
+#include <zlib.h>
 
 /* Size of a regular file; rejects missing files, folders, FIFOs and devices
  * (reading those could hang). */
@@ -17,6 +18,11 @@ vs_status vs_load_check_dims(vs_context *ctx, const char *path, const int64_t di
 /* Largest plausible inflated size of `compressed` bytes of gzip/deflate
  * (deflate cannot exceed about 1032:1), to refuse absurd headers early. */
 uint64_t vs_load_inflate_bound(uint64_t compressed);
+
+/* Reads up to n bytes from gz into dst, in pieces gzread can take (its
+ * count is unsigned); returns the bytes read (fewer: end of data or error,
+ * gzerror says which). */
+uint64_t vs_load_gzread(gzFile gz, void *dst, uint64_t n);
 
 /* Part of a volume file: voxels lo[a] <= i < hi[a] on each axis; a reader
  * given one reads only those voxels (vs_volume_load_box).  dims_only: read

@@ -131,20 +131,12 @@ static vs_status read_voxels(vs_context *ctx, const char *path, const char *inam
     gzFile gz = gzopen(iname, "rb");
     if (!gz) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", iname, strerror(errno));
     gzbuffer(gz, 1 << 18);
-    unsigned char *p = dst;
-    uint64_t got = 0;
     if (offset > 0 && gzseek(gz, (z_off_t)offset, SEEK_SET) != (z_off_t)offset) {
         gzclose(gz);
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: truncated: no voxel data at offset %llu", path,
                             (unsigned long long)offset);
     }
-    while (got < need) {
-        uint64_t left = need - got;
-        unsigned piece = left > (1u << 26) ? (1u << 26) : (unsigned)left;
-        int r = gzread(gz, p + got, piece);
-        if (r <= 0) break;
-        got += (uint64_t)r;
-    }
+    const uint64_t got = vs_load_gzread(gz, dst, need);
     int zerr = Z_OK;
     const char *msg = gzerror(gz, &zerr);
     vs_status st = VS_OK;

@@ -13,9 +13,6 @@
 #include <string.h>
 #include <zlib.h>
 
-/* gzread takes an unsigned count; read in bounded pieces. */
-enum { GZ_PIECE = 1 << 26 };
-
 static void swap_bytes(void *data, size_t n, size_t elem)
 {
     unsigned char *p = data;
@@ -63,15 +60,7 @@ static vs_status read_gz(vs_context *ctx, const char *path, uint64_t need, void 
     gzFile gz = gzopen(path, "rb");
     if (!gz) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     gzbuffer(gz, 1 << 18);
-    unsigned char *p = dst;
-    uint64_t got = 0;
-    while (got < need) {
-        uint64_t left = need - got;
-        unsigned piece = left > GZ_PIECE ? GZ_PIECE : (unsigned)left;
-        int r = gzread(gz, p + got, piece);
-        if (r <= 0) break;
-        got += (uint64_t)r;
-    }
+    const uint64_t got = vs_load_gzread(gz, dst, need);
     if (got < need) {
         int zerr = Z_OK;
         const char *msg = gzerror(gz, &zerr);
