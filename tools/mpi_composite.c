@@ -6,12 +6,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-mpi_rect mpi_touched(const vs_image *img)
+/* The part of rows [y0, y1) of RGBA pixels w wide that holds any opacity
+ * (straight or premultiplied: alpha is the fourth float either way). */
+static mpi_rect touched_rows(const float *rgba, int w, int y0, int y1)
 {
-    mpi_rect r = {img->width, img->height, 0, 0};
-    for (int y = 0; y < img->height; y++)
-        for (int x = 0; x < img->width; x++)
-            if (img->rgba[4 * ((size_t)y * img->width + x) + 3] > 0.0f) {
+    mpi_rect r = {w, y1, 0, y0};
+    for (int y = y0; y < y1; y++)
+        for (int x = 0; x < w; x++)
+            if (rgba[4 * ((size_t)y * w + x) + 3] > 0.0f) {
                 if (x < r.x0) r.x0 = x;
                 if (x >= r.x1) r.x1 = x + 1;
                 if (y < r.y0) r.y0 = y;
@@ -20,6 +22,8 @@ mpi_rect mpi_touched(const vs_image *img)
     if (r.x1 <= r.x0 || r.y1 <= r.y0) r = (mpi_rect){0, 0, 0, 0};
     return r;
 }
+
+mpi_rect mpi_touched(const vs_image *img) { return touched_rows(img->rgba, img->width, 0, img->height); }
 
 static size_t rect_floats(const mpi_rect *r) { return (size_t)(r->x1 - r->x0) * (size_t)(r->y1 - r->y0) * 4; }
 
@@ -140,6 +144,14 @@ static mpi_rect union_rect(MPI_Comm comm, const vs_image *partial)
     return all;
 }
 
+/* Where a rank stands in the front-to-back order. */
+static int position_of(const int *order, int n, int rank)
+{
+    for (int i = 0; i < n; i++)
+        if (order[i] == rank) return i;
+    return 0;
+}
+
 /* inout = in over inout, pixel by pixel: MPI passes the operand of the
  * lower rank (nearer the eye) as `in` for a non-commutative operator. */
 static void over_op(void *in, void *inout, int *len, MPI_Datatype *type)
@@ -162,11 +174,7 @@ int mpi_composite_reduce(MPI_Comm comm, const vs_image *partial, const int *orde
     *bytes_sent = 0;
     const mpi_rect all = union_rect(comm, partial);
     /* ranks numbered front to back; rank 0 of comm is where the image ends */
-    int pos = 0, root = 0;
-    for (int i = 0; i < n; i++) {
-        if (order[i] == rank) pos = i;
-        if (order[i] == 0) root = i;
-    }
+    const int pos = position_of(order, n, rank), root = position_of(order, n, 0);
     const size_t count = rect_floats(&all) / 4;
     float *buf = malloc((count ? 4 * count : 4) * sizeof *buf);
     float *acc = rank == 0 ? calloc((size_t)partial->width * partial->height * 4, sizeof *acc) : NULL;
@@ -210,32 +218,12 @@ int mpi_composite_reduce(MPI_Comm comm, const vs_image *partial, const int *orde
 
 /* ---- binary swap ---- */
 
-/* Pixels of a premultiplied buffer over the union rectangle (w wide): the
- * box [x0, x1) x [y0, y1) in union coordinates. */
-typedef struct piece {
-    int x0, y0, x1, y1;
-} piece;
-
-static size_t piece_px(const piece *p) { return p->x1 > p->x0 && p->y1 > p->y0 ? (size_t)(p->x1 - p->x0) * (size_t)(p->y1 - p->y0) : 0; }
-
-/* The part of rows [y0, y1) of buf that holds any opacity. */
-static piece touched_rows(const float *buf, int w, int y0, int y1)
-{
-    piece p = {w, y1, 0, y0};
-    for (int y = y0; y < y1; y++)
-        for (int x = 0; x < w; x++)
-            if (buf[4 * ((size_t)y * w + x) + 3] > 0.0f) {
-                if (x < p.x0) p.x0 = x;
-                if (x >= p.x1) p.x1 = x + 1;
-                if (y < p.y0) p.y0 = y;
-                if (y >= p.y1) p.y1 = y + 1;
-            }
-    if (p.x1 <= p.x0 || p.y1 <= p.y0) p = (piece){0, 0, 0, 0};
-    return p;
-}
+/* A piece: an mpi_rect in the coordinates of the premultiplied buffer
+ * over the union rectangle (w wide). */
+static size_t piece_px(const mpi_rect *p) { return rect_floats(p) / 4; }
 
 /* The piece's pixels of buf, row after row, into dst. */
-static void copy_piece(const float *buf, int w, const piece *p, float *dst)
+static void copy_piece(const float *buf, int w, const mpi_rect *p, float *dst)
 {
     for (int y = p->y0; y < p->y1; y++) {
         const size_t n = 4 * (size_t)(p->x1 - p->x0);
@@ -246,7 +234,7 @@ static void copy_piece(const float *buf, int w, const piece *p, float *dst)
 
 /* Composites the received piece into buf: over it when this rank is
  * nearer the eye (front), under it otherwise. */
-static void merge(float *buf, int w, const piece *p, const float *src, int front)
+static void merge(float *buf, int w, const mpi_rect *p, const float *src, int front)
 {
     for (int y = p->y0; y < p->y1; y++)
         for (int x = p->x0; x < p->x1; x++, src += 4) {
@@ -263,10 +251,10 @@ static void merge(float *buf, int w, const piece *p, const float *src, int front
 
 /* Sends the touched part of rows [y0, y1) to `to` and takes `from`'s piece
  * into tmp (room for the rows); returns the piece received. */
-static piece swap_rows(MPI_Comm depth, const float *buf, int w, int y0, int y1, int to, int from, float *tmp,
+static mpi_rect swap_rows(MPI_Comm depth, const float *buf, int w, int y0, int y1, int to, int from, float *tmp,
                        float *out, uint64_t *bytes_sent)
 {
-    piece mine = to >= 0 ? touched_rows(buf, w, y0, y1) : (piece){0, 0, 0, 0}, got = {0, 0, 0, 0};
+    mpi_rect mine = to >= 0 ? touched_rows(buf, w, y0, y1) : (mpi_rect){0, 0, 0, 0}, got = {0, 0, 0, 0};
     MPI_Sendrecv(&mine, 4, MPI_INT, to >= 0 ? to : MPI_PROC_NULL, 2, &got, 4, MPI_INT,
                  from >= 0 ? from : MPI_PROC_NULL, 2, depth, MPI_STATUS_IGNORE);
     const size_t ns = piece_px(&mine), nr = piece_px(&got);
@@ -301,9 +289,7 @@ int mpi_composite_swap(MPI_Comm comm, const vs_image *partial, const int *order,
         return rank == 0;
     }
     /* ranks numbered front to back */
-    int pos = 0;
-    for (int i = 0; i < n; i++)
-        if (order[i] == rank) pos = i;
+    const int pos = position_of(order, n, rank);
     MPI_Comm depth;
     MPI_Comm_split(comm, 0, pos, &depth);
     if (count) pack(partial, &all, buf);
@@ -316,7 +302,7 @@ int mpi_composite_swap(MPI_Comm comm, const vs_image *partial, const int *order,
     int vi = pos < 2 * extra ? (pos % 2 ? -1 : pos / 2) : pos - extra;
     if (pos < 2 * extra) {
         const int odd = pos % 2;
-        piece got = swap_rows(depth, buf, w, 0, h, odd ? pos - 1 : -1, odd ? -1 : pos + 1, tmp, snd, bytes_sent);
+        mpi_rect got = swap_rows(depth, buf, w, 0, h, odd ? pos - 1 : -1, odd ? -1 : pos + 1, tmp, snd, bytes_sent);
         if (!odd) merge(buf, w, &got, tmp, 1);
     }
     /* binary swap among the p2 ranks left: each round halves the rows a
@@ -327,14 +313,14 @@ int mpi_composite_swap(MPI_Comm comm, const vs_image *partial, const int *order,
             const int pv = vi ^ bit, partner = pv < extra ? 2 * pv : pv + extra;
             const int mid = y0 + (y1 - y0) / 2, keep_low = !(vi & bit);
             const int sy0 = keep_low ? mid : y0, sy1 = keep_low ? y1 : mid;
-            piece got = swap_rows(depth, buf, w, sy0, sy1, partner, partner, tmp, snd, bytes_sent);
+            mpi_rect got = swap_rows(depth, buf, w, sy0, sy1, partner, partner, tmp, snd, bytes_sent);
             merge(buf, w, &got, tmp, vi < pv);
             if (keep_low) y1 = mid;
             else y0 = mid;
         }
     /* rank 0 of comm gathers the disjoint pieces */
-    piece fin = vi >= 0 ? touched_rows(buf, w, y0, y1) : (piece){0, 0, 0, 0};
-    piece *pieces = rank == 0 ? malloc(sizeof *pieces * (size_t)n) : NULL;
+    mpi_rect fin = vi >= 0 ? touched_rows(buf, w, y0, y1) : (mpi_rect){0, 0, 0, 0};
+    mpi_rect *pieces = rank == 0 ? malloc(sizeof *pieces * (size_t)n) : NULL;
     if (rank == 0 && !pieces) MPI_Abort(comm, 2);
     MPI_Gather(&fin, 4, MPI_INT, pieces, 4, MPI_INT, 0, comm);
     if (rank != 0) {
@@ -345,7 +331,7 @@ int mpi_composite_swap(MPI_Comm comm, const vs_image *partial, const int *order,
         }
     } else {
         for (int r = 0; r < n; r++) {
-            const piece *p = &pieces[r];
+            const mpi_rect *p = &pieces[r];
             if (!piece_px(p)) continue;
             if (r == 0) copy_piece(buf, w, p, tmp);
             else MPI_Recv(tmp, (int)(4 * piece_px(p)), MPI_FLOAT, r, 4, comm, MPI_STATUS_IGNORE);

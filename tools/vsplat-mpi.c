@@ -342,7 +342,7 @@ static int run(int rank, int n, int argc, char **argv)
     plan P;
     memset(&P, 0, sizeof P);
     double ms_load = 0, ms_prepare = 0;
-    double voxels_read = 0;
+    double voxels_first = 0; /* read first: this rank's slab, or the whole volume */
     int z0 = 0;
     if (parts) {
         if (mpi_weights_init(&W, dims)) fail(&sp, EXIT_INTERNAL, "out of memory%s", "", NULL);
@@ -355,7 +355,7 @@ static int run(int rank, int n, int argc, char **argv)
             const int lo[3] = {0, 0, z0}, hi[3] = {dims[0], dims[1], z1};
             st = vs_volume_load_box(ctx, o.input, &o.load, lo, hi, &full);
             if (st != VS_OK) lib_fail(&sp, ctx, st, o.input);
-            voxels_read = (double)dims[0] * dims[1] * (z1 - z0);
+            voxels_first = (double)dims[0] * dims[1] * (z1 - z0);
         }
         ms_load = 1e3 * (MPI_Wtime() - t_load);
     } else if (rank == 0) {
@@ -365,7 +365,7 @@ static int run(int rank, int n, int argc, char **argv)
         if (st != VS_OK) lib_fail(&sp, ctx, st, o.scene ? "--scene" : o.input);
         if (!sp.rc) {
             vs_volume_dims(full, dims);
-            voxels_read = (double)dims[0] * dims[1] * dims[2];
+            voxels_first = (double)dims[0] * dims[1] * dims[2];
         }
     }
     rc = agree(&sp, rank, n);
@@ -389,12 +389,12 @@ static int run(int rank, int n, int argc, char **argv)
             o.s.iso_hi = INFINITY;
         }
     }
-    if (rank == 0 && n > 1) { /* on the whole volume, or on rank 0's slab with the whole range */
-        if (o.tf_path) {
-            st = vs_tf_load_for_volume(ctx, o.tf_path, full, &tf, &o.s.tf_count);
-            if (st != VS_OK) lib_fail(&sp, ctx, st, o.tf_path);
-            o.s.tf = tf;
-        }
+    if (rank == 0 && o.tf_path) { /* the whole volume, or rank 0's slab with the whole range */
+        st = vs_tf_load_for_volume(ctx, o.tf_path, full, &tf, &o.s.tf_count);
+        if (st != VS_OK) lib_fail(&sp, ctx, st, o.tf_path);
+        o.s.tf = tf;
+    }
+    if (rank == 0 && n > 1) {
         if (!sp.rc) resolve_classification(ctx, full, &o.s, &P.alo, &P.ahi, &sp);
         if (!sp.rc) {
             P.type = vs_volume_type(full);
@@ -410,13 +410,8 @@ static int run(int rank, int n, int argc, char **argv)
             cli_settle_view(&o, full);
             P.view = o.s.view;
         }
-    } else if (rank == 0) {
-        if (o.tf_path) {
-            st = vs_tf_load_for_volume(ctx, o.tf_path, full, &tf, &o.s.tf_count);
-            if (st != VS_OK) lib_fail(&sp, ctx, st, o.tf_path);
-            o.s.tf = tf;
-        }
-        if (!sp.rc) render_single(ctx, full, &o, t_start, ms_load, &sp);
+    } else if (rank == 0 && !sp.rc) {
+        render_single(ctx, full, &o, t_start, ms_load, &sp);
     }
     rc = agree(&sp, rank, n);
     if (rc || n == 1) goto done;
@@ -467,10 +462,8 @@ static int run(int rank, int n, int argc, char **argv)
     else if (parts) {
         if ((st = vs_volume_load_box(ctx, o.input, &o.load, B->glo, B->ghi, &brick)) != VS_OK)
             lib_fail(&sp, ctx, st, o.input);
-        else {
+        else
             vs_volume_set_range(brick, P.vmin, P.vmax);
-            voxels_read += (double)gd[0] * gd[1] * gd[2];
-        }
     } else if ((st = vs_volume_create(ctx, P.type, gd, P.spacing, &brick)) != VS_OK)
         lib_fail(&sp, ctx, st, "its brick");
     else {
@@ -578,9 +571,8 @@ static int run(int rank, int n, int argc, char **argv)
     mine.ms_load = ms_load;
     mine.ms_prepare = ms_prepare;
     mine.voxels_held = (double)gd[0] * gd[1] * gd[2];
-    mine.voxels_read = voxels_read;
-    const double first = parts ? voxels_read - mine.voxels_held : voxels_read; /* slab, or the whole volume */
-    mine.voxels_peak = first > mine.voxels_held ? first : mine.voxels_held;
+    mine.voxels_read = voxels_first + (parts ? mine.voxels_held : 0.0); /* the brick came from the file too */
+    mine.voxels_peak = voxels_first > mine.voxels_held ? voxels_first : mine.voxels_held;
     mine.voxels_total = (double)P.dims[0] * P.dims[1] * P.dims[2];
     mine.parts = parts;
     mine.voxels_relevant = (double)stats.voxels_relevant;
