@@ -86,6 +86,17 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
     }
 
     cli_settle_view(&o, vol); /* the frames turn from the first one's view */
+    vs_tf_point *tf = NULL;
+    if (o.tf_path) { /* after the volume: .1dt spreads over its range */
+        st = vs_tf_load_for_volume(ctx, o.tf_path, vol, &tf, &o.s.tf_count);
+        if (st != VS_OK) {
+            fprintf(stderr, "vsplat-bench: %s\n", vs_last_error(ctx));
+            vs_volume_release(vol);
+            vs_context_release(ctx);
+            return 1;
+        }
+        o.s.tf = tf;
+    }
     vs_settings s = o.s;
     vs_image img = {0, 0, NULL};
     vs_stats first;
@@ -94,6 +105,7 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
     vs_image_free(&img);
     if (st != VS_OK) {
         fprintf(stderr, "vsplat-bench: frame: %s\n", vs_last_error(ctx));
+        vs_tf_free(tf);
         vs_volume_release(vol);
         vs_context_release(ctx);
         return 2;
@@ -120,6 +132,7 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
         if (st != VS_OK) {
             fprintf(stderr, "vsplat-bench: frame %d: %s\n", i, vs_last_error(ctx));
             free(ms);
+            vs_tf_free(tf);
             vs_volume_release(vol);
             vs_context_release(ctx);
             return 2;
@@ -169,6 +182,7 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
         vs_trace_release(trace);
     }
     free(ms);
+    vs_tf_free(tf);
     vs_volume_release(vol);
     vs_context_release(ctx);
     return st == VS_OK ? 0 : 2;

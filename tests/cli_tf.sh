@@ -132,6 +132,24 @@ expect_fail "--bits 16 gif" "GIF output is 8-bit" render "${S[@]}" --bits 16 -o 
 expect_fail "--fps without gif" "--fps applies" render "${S[@]}" --fps 10 -o x.png
 expect_fail "--turntable 0" "--turntable: 0 is out of range" render "${S[@]}" --turntable 0 -o x.png
 expect_fail "--turntable word" "--turntable: 'many' is not an integer" render "${S[@]}" --turntable many -o x.png
+# --- vsplat-bench frame renders what vsplat renders, --tf included ---
+BENCH=$(dirname "$VSPLAT")/bench/vsplat-bench
+if [[ -x $BENCH ]]; then
+    expect_ok "tf render" render "${S[@]}" --tf sphere.vtf -o tf-cli.png
+    if "$BENCH" frame "${S[@]}" --tf sphere.vtf --frames 1 -o tf-bench.png >"$T/out" 2>"$T/err"; then ok; else
+        bad "vsplat-bench frame --tf: $(cat "$T/err")"
+    fi
+    run compare tf-cli.png tf-bench.png
+    if grep -q 'max=0$' "$T/out"; then ok; else bad "vsplat-bench frame --tf differs from vsplat render: $(cat "$T/out")"; fi
+    if "$BENCH" frame "${S[@]}" --tf missing.vtf --frames 1 >"$T/out" 2>"$T/err"; then
+        bad "vsplat-bench frame with a missing --tf succeeded"
+    elif [[ $(wc -l <"$T/err") -eq 1 ]] && grep -q "missing.vtf" "$T/err"; then ok; else
+        bad "vsplat-bench frame, missing --tf: $(cat "$T/err")"
+    fi
+else
+    echo "note: $BENCH not built; vsplat-bench frame not checked"
+fi
+
 run render --help
 for opt in --tf --turntable --fps; do
     if grep -q -- "$opt\b" "$T/out"; then ok; else bad "render --help does not list $opt"; fi
