@@ -21,7 +21,8 @@ typedef struct kernel_entry {
                  10 splat_voxel1, 11 splat_voxel4 (8 rows of 8/64 floats into 4 sheets),
                  12 place_voxels (n voxels in batches of 16),
                  13 splat_voxel_gs (as splat_voxel4, with the gradient layout),
-                 14 splat_rows_mix (8 rows of the gradient layout, mixed, into one sheet) */
+                 14 splat_rows_mix (8 rows of the gradient layout, mixed, into one sheet),
+                 15 shade_terms (n dense gradients), 16 preint_alpha (n segments in two halves) */
     void *fn;
 } kernel_entry;
 
@@ -53,7 +54,11 @@ typedef struct shade_bench {
     float pend[VS_PLACE_BATCH * 9], depth[258];
     vs_place_in PL;
     vs_placed placed;
+    /* preint_alpha: a random 256 x 256 table over the sheets' values */
+    vs_preint_tabs PT;
 } shade_bench;
+
+static float preint_table[4 * 256 * 256] __attribute__((aligned(64)));
 
 static void shade_bench_init(shade_bench *B)
 {
@@ -81,7 +86,9 @@ static void shade_bench_init(shade_bench *B)
         B->radius[i] = (uint8_t)(RND() * 181);
     }
     for (int i = 0; i < 255 * 181; i++) B->phi_bin[i] = (uint16_t)(RND() * SHADE_NP);
+    for (int i = 0; i < 4 * 256 * 256; i++) preint_table[i] = RND();
 #undef RND
+    B->PT = (vs_preint_tabs){preint_table, 0.0f, 255.0f / 100.0f, 256};
     for (int i = 0; i < VS_PROJECT_MAX; i++) B->vox[i] = (uint16_t)i;
     const float c = 1.6f, sn = 1.6f; /* 2.26 px per voxel, turned 45 degrees */
     B->P = (vs_project_in){.base = {100.0f, 100.0f, 50.0f},
@@ -167,6 +174,12 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
                 ((vs_splat_rows_mix_fn)k->fn)(buf + off, BLOCK_DS, ex, ex + 64, dxy, dxy + 24, BLOCK_ROWS,
                                               block_nvec(n), 1e-6f, m);
             } break;
+            case 15:
+                ((vs_shade_terms_fn)k->fn)(buf + off, buf + 256 + off, B->g0 + 3 * off, n, &B->T);
+                break;
+            case 16:
+                ((vs_preint_alpha_fn)k->fn)(buf + off, B->q + off, B->qp + off, B->qn + off, n, &B->PT);
+                break;
             case 12:
                 for (int b = 0; b < n; b += VS_PLACE_BATCH) {
                     volatile unsigned live = ((vs_place_voxels_fn)k->fn)(
@@ -220,6 +233,10 @@ int bench_kernels(const bench_opts *o)
         {"classify_gs", VS_ISA_AVX2, 7, (void *)vs_classify_gs_avx2},
         {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
         {"shade_lut", VS_ISA_AVX2, 6, (void *)vs_shade_lut_avx2},
+        {"shade_terms", VS_ISA_SCALAR, 15, (void *)vs_shade_terms_scalar},
+        {"shade_terms", VS_ISA_AVX2, 15, (void *)vs_shade_terms_avx2},
+        {"preint_alpha", VS_ISA_SCALAR, 16, (void *)vs_preint_alpha_scalar},
+        {"preint_alpha", VS_ISA_AVX2, 16, (void *)vs_preint_alpha_avx2},
         {"splat_voxel1", VS_ISA_SCALAR, 10, (void *)vs_splat_voxel1_scalar},
         {"splat_voxel1", VS_ISA_AVX2, 10, (void *)vs_splat_voxel1_avx2},
         {"splat_voxel1", VS_ISA_AVX512, 10, (void *)vs_splat_voxel1_avx512},

@@ -31,6 +31,8 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
     k->classify_cd = vs_classify_cd_scalar;
     k->classify_gs = vs_classify_gs_scalar;
     k->shade_lut = vs_shade_lut_scalar;
+    k->shade_terms = vs_shade_terms_scalar;
+    k->preint_alpha = vs_preint_alpha_scalar;
     k->project_brick = vs_project_brick_scalar;
     k->splat_voxel1 = vs_splat_voxel1_scalar;
     k->splat_voxel4 = vs_splat_voxel4_scalar;
@@ -52,6 +54,8 @@ void vs_kernels_init(vs_kernels *k, vs_isa cap)
         k->classify_cd = vs_classify_cd_avx2;
         k->classify_gs = vs_classify_gs_avx2;
         k->shade_lut = vs_shade_lut_avx2;
+        k->shade_terms = vs_shade_terms_avx2;
+        k->preint_alpha = vs_preint_alpha_avx2;
         k->composite = vs_composite_avx2;
         k->project_brick = vs_project_brick_avx2;
         k->splat_voxel1 = vs_splat_voxel1_avx2;

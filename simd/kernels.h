@@ -34,6 +34,27 @@ typedef struct vs_shade_tabs {
     const uint16_t *phi_bin;
     const float *diffuse, *specular;
 } vs_shade_tabs;
+/* The pre-integration table (src/preintegrate.h) as the kernels see it:
+ * [n][n] entries over (front, back) of (opacity, premultiplied r g b). */
+typedef struct vs_preint_tabs {
+    const float *tab;
+    float vmin, scale; /* coordinate x = (v - vmin) * scale, in [0, n - 1] */
+    int n;
+} vs_preint_tabs;
+
+/* The cell of value v along one axis of that table and the fraction
+ * within it: the reference every version follows (NaN and values below
+ * the table take its first entry, values past it the last). */
+static inline int vs_preint_cell(const vs_preint_tabs *P, float v, float *frac)
+{
+    float x = (v - P->vmin) * P->scale;
+    const float top = (float)(P->n - 2);
+    if (!(x > 0.0f)) x = 0.0f;
+    const int i = x < top ? (int)x : P->n - 2;
+    *frac = x < top + 1.0f ? x - (float)i : 1.0f;
+    return i;
+}
+
 /* Entries of the classification tables (VS_TF_TABLE in classify.h). */
 #define VS_KTAB 4096
 
@@ -134,6 +155,16 @@ typedef struct vs_kernels {
      * table at v[i * vstride], plus specular, replaces g[3i..]; other
      * pixels are left alone */
     void (*shade_lut)(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
+    /* the Phong terms alone, for every i < n: d[i], s[i] = diffuse and
+     * specular of the gradient g[3i..] through the normal LUT (pre-
+     * integrated shading mixes them with the table's colours) */
+    void (*shade_terms)(float *d, float *s, const float *g, int n, const vs_shade_tabs *T);
+    /* pre-integrated opacity of n segments taken as two halves, f[i] to
+     * m[i] and m[i] to b[i]: alpha[i] = a1 + (1 - a1) a2, each the table's
+     * opacity interpolated bilinearly at its cells (vs_preint_cell):
+     * u = e00 + fy (e01 - e00), v = e10 + fy (e11 - e10), u + fx (v - u) */
+    void (*preint_alpha)(float *alpha, const float *f, const float *m, const float *b, int n,
+                         const vs_preint_tabs *P);
     /* voxel transform and binning: for the n (<= VS_PROJECT_MAX) voxels of a
      * brick, vox[i] = di | dj << 3 | dk << 6, the view position
      *   x = ((base[0] + m[0][0] di) + m[0][1] dj) + m[0][2] dk   (y, z alike)
@@ -199,6 +230,9 @@ typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const 
 typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
                                 const vs_shade_tabs *T);
+typedef void (*vs_shade_terms_fn)(float *d, float *s, const float *g, int n, const vs_shade_tabs *T);
+typedef void (*vs_preint_alpha_fn)(float *alpha, const float *f, const float *m, const float *b, int n,
+                                   const vs_preint_tabs *P);
 typedef int (*vs_composite_fn)(float *acc, const float *alpha, const float *rgb, int n, float thr);
 
 /* The versions, by family: the scalar reference of every kernel is in
@@ -269,9 +303,15 @@ void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp
 void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 
-/* shade: shade_lut */
+/* shade: shade_lut, shade_terms */
 void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
 void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);
+void vs_shade_terms_scalar(float *d, float *s, const float *g, int n, const vs_shade_tabs *T);
+void vs_shade_terms_avx2(float *d, float *s, const float *g, int n, const vs_shade_tabs *T);
+void vs_preint_alpha_scalar(float *alpha, const float *f, const float *m, const float *b, int n,
+                            const vs_preint_tabs *P);
+void vs_preint_alpha_avx2(float *alpha, const float *f, const float *m, const float *b, int n,
+                          const vs_preint_tabs *P);
 
 /* composite */
 int vs_composite_scalar(float *acc, const float *alpha, const float *rgb, int n, float thr);

@@ -92,29 +92,36 @@ void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const
     }
 }
 
+/* vs_shade_lut_eval (src/shade_lut.h) on the view-space gradient c: the
+ * index of its diffuse and specular terms */
+static inline int lut_index(const float *c, const vs_shade_tabs *T)
+{
+    float gx = c[0] * T->ppm, gy = c[1] * T->ppm, gz = c[2] * T->zpm;
+    float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
+    float m = ax > ay ? ax : ay;
+    if (az > m) m = az;
+    if (!(ax <= FLT_MAX && ay <= FLT_MAX && az <= FLT_MAX) || !(m >= 1e-30f)) m = 0.0f;
+    int ix = 0, iy = 0, iz = 0;
+    if (m > 0.0f) {
+        float k = 127.0f / m;
+        ix = (int)lrintf(gx * k);
+        iy = (int)lrintf(gy * k);
+        iz = (int)lrintf(gz * k);
+    }
+    if (ix == 0 && iy == 0 && iz == 0) iz = -127;
+    int li = T->lambda_bin[(iy + 127) * 255 + (ix + 127)];
+    int r = T->radius[(iy + 127) * 255 + (ix + 127)];
+    int pi = T->phi_bin[(iz + 127) * 181 + r];
+    return pi * T->nl + li;
+}
+
 void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
 {
     for (int i = 0; i < n; i++) {
         if (!(alpha[i] > 0.0f)) continue;
         float *c = g + 3 * i;
-        /* vs_shade_lut_eval (src/shade_lut.h), on the eye-frame gradient */
-        float gx = c[0] * T->ppm, gy = c[1] * T->ppm, gz = c[2] * T->zpm;
-        float ax = gx < 0 ? -gx : gx, ay = gy < 0 ? -gy : gy, az = gz < 0 ? -gz : gz;
-        float m = ax > ay ? ax : ay;
-        if (az > m) m = az;
-        if (!(ax <= FLT_MAX && ay <= FLT_MAX && az <= FLT_MAX) || !(m >= 1e-30f)) m = 0.0f;
-        int ix = 0, iy = 0, iz = 0;
-        if (m > 0.0f) {
-            float k = 127.0f / m;
-            ix = (int)lrintf(gx * k);
-            iy = (int)lrintf(gy * k);
-            iz = (int)lrintf(gz * k);
-        }
-        if (ix == 0 && iy == 0 && iz == 0) iz = -127;
-        int li = T->lambda_bin[(iy + 127) * 255 + (ix + 127)];
-        int r = T->radius[(iy + 127) * 255 + (ix + 127)];
-        int pi = T->phi_bin[(iz + 127) * 181 + r];
-        float d = T->diffuse[pi * T->nl + li], sp = T->specular[pi * T->nl + li];
+        const int di = lut_index(c, T);
+        float d = T->diffuse[di], sp = T->specular[di];
         /* colour table, clamped at its ends */
         float x = tab_coord(T, v[(ptrdiff_t)i * vstride]);
         float rgb[3];
@@ -129,6 +136,35 @@ void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstri
         c[0] = rgb[0] * d + sp;
         c[1] = rgb[1] * d + sp;
         c[2] = rgb[2] * d + sp;
+    }
+}
+
+void vs_shade_terms_scalar(float *d, float *s, const float *g, int n, const vs_shade_tabs *T)
+{
+    for (int i = 0; i < n; i++) {
+        const int di = lut_index(g + 3 * i, T);
+        d[i] = T->diffuse[di];
+        s[i] = T->specular[di];
+    }
+}
+
+/* the table's opacity between (f, b) */
+static inline float preint_alpha1(const vs_preint_tabs *P, float f, float b)
+{
+    float fx, fy;
+    const int i = vs_preint_cell(P, f, &fx), j = vs_preint_cell(P, b, &fy);
+    const float *e00 = P->tab + 4 * ((size_t)i * (size_t)P->n + (size_t)j), *e10 = e00 + 4 * P->n;
+    const float u = e00[0] + fy * (e00[4] - e00[0]);
+    const float v = e10[0] + fy * (e10[4] - e10[0]);
+    return u + fx * (v - u);
+}
+
+void vs_preint_alpha_scalar(float *alpha, const float *f, const float *m, const float *b, int n,
+                            const vs_preint_tabs *P)
+{
+    for (int i = 0; i < n; i++) {
+        const float a1 = preint_alpha1(P, f[i], m[i]), a2 = preint_alpha1(P, m[i], b[i]);
+        alpha[i] = a1 + (1.0f - a1) * a2;
     }
 }
 

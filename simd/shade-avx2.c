@@ -1,5 +1,5 @@
 /* AVX2 shading of a sheet's visible pixels through the normal and colour
- * tables (kernels.h shade_lut), bit-identical to scalar.c: the colour
+ * tables (kernels.h shade_lut, shade_terms), bit-identical to scalar.c: the colour
  * table's coordinate in double as the reference, lrintf as cvtps (round to
  * nearest), one multiply and one add per element.  Tails go to the scalar
  * reference (pixels are independent). */
@@ -27,7 +27,11 @@ static inline void load3(const float *p, __m256 *x, __m256 *y, __m256 *z)
  * passes, the gathers of different vectors are independent and overlap. */
 enum { BLK = 64 };
 
-void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
+/* Passes 1 and 2 over nv vectors of gradients g (3 floats a pixel): the
+ * shading table's index of each pixel into ia; live[c], vector c's pixels
+ * with alpha > 0 (alpha NULL: all), vectors without any are skipped. */
+static inline void lut_bins(const float *g, const float *alpha, int nv, int live[BLK / 8], int32_t ia[BLK],
+                            const vs_shade_tabs *T)
 {
     const __m256 ppm = _mm256_set1_ps(T->ppm), zpm = _mm256_set1_ps(T->zpm), zero = _mm256_setzero_ps();
     const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
@@ -36,50 +40,55 @@ void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride
     const __m256i off_lr = _mm256_set1_epi32(127 * 255 + 127), off_p = _mm256_set1_epi32(127 * 181);
     const __m256i c255 = _mm256_set1_epi32(255), c181 = _mm256_set1_epi32(181), cnl = _mm256_set1_epi32(T->nl);
     const __m256i lo16 = _mm256_set1_epi32(0xffff), lo8 = _mm256_set1_epi32(0xff);
+    _Alignas(32) int32_t ib[BLK];
+    /* pass 1: quantised gradient -> lambda bin (ia) and phi index (ib) */
+    for (int c = 0; c < nv; c++) {
+        live[c] = alpha ? _mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(alpha + 8 * c), zero, _CMP_GT_OQ)) : 0xff;
+        if (!live[c]) continue;
+        __m256 g0x, g0y, g0z;
+        load3(g + 24 * c, &g0x, &g0y, &g0z);
+        __m256 gx = _mm256_mul_ps(g0x, ppm), gy = _mm256_mul_ps(g0y, ppm), gz = _mm256_mul_ps(g0z, zpm);
+        __m256 ax = _mm256_and_ps(gx, absmask), ay = _mm256_and_ps(gy, absmask), az = _mm256_and_ps(gz, absmask);
+        __m256 m = _mm256_max_ps(_mm256_max_ps(ax, ay), az); /* NaN lanes are cleared below */
+        __m256 ok = _mm256_and_ps(
+            _mm256_and_ps(_mm256_cmp_ps(ax, fmax, _CMP_LE_OQ), _mm256_cmp_ps(ay, fmax, _CMP_LE_OQ)),
+            _mm256_and_ps(_mm256_cmp_ps(az, fmax, _CMP_LE_OQ), _mm256_cmp_ps(m, tiny, _CMP_GE_OQ)));
+        __m256 k = _mm256_div_ps(k127, _mm256_blendv_ps(k127, m, ok)); /* no division by 0 or NaN */
+        __m256i oki = _mm256_castps_si256(ok);
+        __m256i ix = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gx, k)), oki);
+        __m256i iy = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gy, k)), oki);
+        __m256i iz = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gz, k)), oki);
+        __m256i allz = _mm256_cmpeq_epi32(_mm256_or_si256(_mm256_or_si256(ix, iy), iz), zi);
+        iz = _mm256_blendv_epi8(iz, m127, allz); /* zero gradient: faces the eye */
+        __m256i lr = _mm256_add_epi32(_mm256_mullo_epi32(iy, c255), _mm256_add_epi32(ix, off_lr));
+        __m256i li = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->lambda_bin, lr, 2), lo16);
+        __m256i r = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->radius, lr, 1), lo8);
+        _mm256_store_si256((__m256i *)(void *)(ia + 8 * c), li);
+        _mm256_store_si256((__m256i *)(void *)(ib + 8 * c),
+                           _mm256_add_epi32(_mm256_mullo_epi32(iz, c181), _mm256_add_epi32(r, off_p)));
+    }
+    /* pass 2: phi bin -> shading table index (ia) */
+    for (int c = 0; c < nv; c++) {
+        if (!live[c]) continue;
+        __m256i pidx = _mm256_load_si256((const __m256i *)(const void *)(ib + 8 * c));
+        __m256i pi = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->phi_bin, pidx, 2), lo16);
+        __m256i li = _mm256_load_si256((const __m256i *)(const void *)(ia + 8 * c));
+        _mm256_store_si256((__m256i *)(void *)(ia + 8 * c), _mm256_add_epi32(_mm256_mullo_epi32(pi, cnl), li));
+    }
+}
+
+void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
+{
     const __m256d vmin = _mm256_set1_pd(T->vmin), scale = _mm256_set1_pd(T->scale);
     const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
     const __m256i vidx = _mm256_mullo_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(vstride));
     const float *col = T->color;
-    _Alignas(32) int32_t ia[BLK], ib[BLK];
+    _Alignas(32) int32_t ia[BLK];
     int i0 = 0;
     for (; i0 + 8 <= n; i0 += BLK) {
         const int nv = (n - i0 < BLK ? n - i0 : BLK) / 8;
         int live[BLK / 8];
-        /* pass 1: quantised gradient -> lambda bin (ia) and phi index (ib) */
-        for (int c = 0; c < nv; c++) {
-            const int i = i0 + 8 * c;
-            live[c] = _mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(alpha + i), zero, _CMP_GT_OQ));
-            if (!live[c]) continue;
-            __m256 g0x, g0y, g0z;
-            load3(g + 3 * i, &g0x, &g0y, &g0z);
-            __m256 gx = _mm256_mul_ps(g0x, ppm), gy = _mm256_mul_ps(g0y, ppm), gz = _mm256_mul_ps(g0z, zpm);
-            __m256 ax = _mm256_and_ps(gx, absmask), ay = _mm256_and_ps(gy, absmask), az = _mm256_and_ps(gz, absmask);
-            __m256 m = _mm256_max_ps(_mm256_max_ps(ax, ay), az); /* NaN lanes are cleared below */
-            __m256 ok = _mm256_and_ps(
-                _mm256_and_ps(_mm256_cmp_ps(ax, fmax, _CMP_LE_OQ), _mm256_cmp_ps(ay, fmax, _CMP_LE_OQ)),
-                _mm256_and_ps(_mm256_cmp_ps(az, fmax, _CMP_LE_OQ), _mm256_cmp_ps(m, tiny, _CMP_GE_OQ)));
-            __m256 k = _mm256_div_ps(k127, _mm256_blendv_ps(k127, m, ok)); /* no division by 0 or NaN */
-            __m256i oki = _mm256_castps_si256(ok);
-            __m256i ix = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gx, k)), oki);
-            __m256i iy = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gy, k)), oki);
-            __m256i iz = _mm256_and_si256(_mm256_cvtps_epi32(_mm256_mul_ps(gz, k)), oki);
-            __m256i allz = _mm256_cmpeq_epi32(_mm256_or_si256(_mm256_or_si256(ix, iy), iz), zi);
-            iz = _mm256_blendv_epi8(iz, m127, allz); /* zero gradient: faces the eye */
-            __m256i lr = _mm256_add_epi32(_mm256_mullo_epi32(iy, c255), _mm256_add_epi32(ix, off_lr));
-            __m256i li = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->lambda_bin, lr, 2), lo16);
-            __m256i r = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->radius, lr, 1), lo8);
-            _mm256_store_si256((__m256i *)(void *)(ia + 8 * c), li);
-            _mm256_store_si256((__m256i *)(void *)(ib + 8 * c),
-                               _mm256_add_epi32(_mm256_mullo_epi32(iz, c181), _mm256_add_epi32(r, off_p)));
-        }
-        /* pass 2: phi bin -> shading table index (ia) */
-        for (int c = 0; c < nv; c++) {
-            if (!live[c]) continue;
-            __m256i pidx = _mm256_load_si256((const __m256i *)(const void *)(ib + 8 * c));
-            __m256i pi = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)T->phi_bin, pidx, 2), lo16);
-            __m256i li = _mm256_load_si256((const __m256i *)(const void *)(ia + 8 * c));
-            _mm256_store_si256((__m256i *)(void *)(ia + 8 * c), _mm256_add_epi32(_mm256_mullo_epi32(pi, cnl), li));
-        }
+        lut_bins(g + 3 * i0, alpha + i0, nv, live, ia, T);
         /* pass 3, per visible pixel (a quarter of the pixels on the head):
          * diffuse, specular, and the colour table as one 4-float vector
          * (r, g, b, -) from two unaligned loads, instead of eight gathers */
@@ -122,4 +131,25 @@ void vs_shade_lut_avx2(float *g, const float *alpha, const float *v, int vstride
         }
     }
     if (i0 < n) vs_shade_lut_scalar(g + 3 * i0, alpha + i0, v + (ptrdiff_t)i0 * vstride, vstride, n - i0, T);
+}
+
+void vs_shade_terms_avx2(float *d, float *s, const float *g, int n, const vs_shade_tabs *T)
+{
+    _Alignas(32) int32_t ia[BLK];
+    int i0 = 0;
+    for (; i0 + 8 <= n; i0 += BLK) {
+        const int nv = (n - i0 < BLK ? n - i0 : BLK) / 8;
+        int live[BLK / 8];
+        lut_bins(g + 3 * i0, NULL, nv, live, ia, T);
+        for (int c = 0; c < nv; c++) {
+            const __m256i di = _mm256_load_si256((const __m256i *)(const void *)(ia + 8 * c));
+            _mm256_storeu_ps(d + i0 + 8 * c, _mm256_i32gather_ps(T->diffuse, di, 4));
+            _mm256_storeu_ps(s + i0 + 8 * c, _mm256_i32gather_ps(T->specular, di, 4));
+        }
+        if (nv * 8 < BLK) {
+            i0 += nv * 8;
+            break;
+        }
+    }
+    if (i0 < n) vs_shade_terms_scalar(d + i0, s + i0, g + 3 * i0, n - i0, T);
 }

@@ -2,7 +2,8 @@
  * samples the density once a slab, so where opacity changes within a slab
  * (a thin translucent layer, the edge of a narrow iso-range) plain sheets
  * see it or miss it depending on where the samples fall: concentric rings.
- * The table holds, for a segment one slab long whose density runs linearly
+ * The table holds, for a segment of a given length (half a slab in a
+ * frame) whose density runs linearly
  * from f to b, the opacity and emitted colour of the exact integral of the
  * transfer function along it, so every value between the two samples
  * counts.  The integral over a piece of the segment comes from prefix sums
@@ -139,6 +140,7 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
     p->scale = (VS_PREINT_N - 1) / (c->vmax - c->vmin);
     p->fvmin = (float)p->vmin;
     p->fscale = (float)p->scale;
+    p->tabs = (vs_preint_tabs){p->tab, p->fvmin, p->fscale, VS_PREINT_N};
     build_job J = {p, c, slab, &P};
     const int ntask = (VS_PREINT_N + ROWS - 1) / ROWS;
     if (pool)
@@ -156,11 +158,38 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
     return 1;
 }
 
-void vs_preint_alpha_row(const vs_preint *p, float base, float *alpha, const float *q, const float *qn, int qs, int n)
+/* segments a kernel call takes */
+enum { CHUNK = 64 };
+
+void vs_preint_alpha_row_gs(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *q4,
+                            const float *qn4, int n)
 {
-    for (int i = 0; i < n; i++) {
-        const vs_preint_at a = vs_preint_locate(p, q[(ptrdiff_t)i * qs] + base, qn[(ptrdiff_t)i * qs] + base);
-        alpha[i] = vs_preint_get(p, &a, 0);
+    float f[CHUNK], m[CHUNK], b[CHUNK];
+    for (int i0 = 0; i0 < n; i0 += CHUNK) {
+        const int c = n - i0 < CHUNK ? n - i0 : CHUNK;
+        for (int i = 0; i < c; i++) {
+            const float *q = q4 + 4 * (i0 + i), *qn = qn4 + 4 * (i0 + i);
+            f[i] = q[0] + base;
+            m[i] = vs_preint_mid_gs(q, qn) + base;
+            b[i] = qn[0] + base;
+        }
+        k->preint_alpha(alpha + i0, f, m, b, c, &p->tabs);
+    }
+}
+
+void vs_preint_alpha_row_cd(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp,
+                            const float *q, const float *qn, int n)
+{
+    float f[CHUNK], m[CHUNK], b[CHUNK];
+    for (int i0 = 0; i0 < n; i0 += CHUNK) {
+        const int c = n - i0 < CHUNK ? n - i0 : CHUNK;
+        for (int i = 0; i < c; i++) {
+            const int j = i0 + i;
+            f[i] = q[j] + base;
+            m[i] = vs_preint_mid_cd(qp[j], q[j], qn[j]) + base;
+            b[i] = qn[j] + base;
+        }
+        k->preint_alpha(alpha + i0, f, m, b, c, &p->tabs);
     }
 }
 

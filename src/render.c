@@ -399,7 +399,7 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
                 goto fail;
             }
-            if (!vs_preint_update(ctx->preint, F.cls, slab_len, ctx->pool)) {
+            if (!vs_preint_update(ctx->preint, F.cls, 0.5 * slab_len, ctx->pool)) { /* halves */
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
                 goto fail;
             }

@@ -2,12 +2,11 @@
  * Phong terms of the grid gradient; post-alpha: those terms alone) and
  * sheet pixels after classification (post-shaded: the Phong terms of the
  * sheet's gradient, by the Clyne-Dennis tables or exact, times the colour
- * table or the pre-integrated segment's colour; pre: the splatted colour
+ * table, or with pre-integration shade_preint.c's; pre: the splatted colour
  * divided by the splatted opacity; post-alpha: the splatted light terms
  * divided by the splatted opacity, times the classified colour).  The
  * light model is light.c's, the tables shade_lut.c's. */
 #include "shade.h"
-#include "preintegrate.h"
 
 #include <float.h>
 #include <math.h>
@@ -198,60 +197,6 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             c[0] = rgb[0] * d + spec;
             c[1] = rgb[1] * d + spec;
             c[2] = rgb[2] * d + spec;
-        }
-}
-
-/* Post-shaded with pre-integration: the Phong terms of the gradient where
- * the segment from this sheet to the next is opaque (the two sheets'
- * gradients mixed by the table's opacity-weighted position; else a thin
- * layer between sheets is lit as wherever the sheet happens to lie: rings)
- * times the colour the segment emits (its premultiplied colour over its
- * opacity).  Sheet k + 1's gradient: post-gs splatted it; post-cd takes its
- * in-sheet differences and, as sheet k + 2 is not splatted yet, the
- * difference across the segment extrapolated from sheet k's. */
-void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
-{
-    const vs_frame *F = t->F;
-    const spans *sp = sv->sp;
-    const int ch = F->stages->ch;
-    const int gs = F->stages->gradient_splats, mix = !F->cam.persp;
-    const float slab = (float)F->fp.slab;
-    const ptrdiff_t st = t->stride;
-    for (int y = sp->y0; y < sp->y1; y++)
-        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
-            size_t b = (size_t)y * t->stride + x;
-            if (!(sb.alpha[o] > 0.0f)) continue;
-            float *c = sb.g + 3 * o;
-            float d, spec, e[4];
-            const float qf = sv->q[ch * b], qb = sv->next[ch * b], base = (float)F->base;
-            const vs_preint_at at = vs_preint_locate(F->preint, qf + base, qb + base);
-            for (int i = 0; i < 4; i++) e[i] = vs_preint_get(F->preint, &at, i);
-            float g[3] = {c[0], c[1], c[2]};
-            const float w = mix ? vs_preint_position(F->preint, &at, e[0]) : 0.0f;
-            if (w > 0.0f) {
-                float h[3];
-                if (gs) {
-                    for (int i = 0; i < 3; i++) h[i] = sv->next[4 * b + 1 + i] / slab;
-                } else {
-                    const float *n = sv->next + b;
-                    h[0] = 0.5f * (n[1] - n[-1]);
-                    h[1] = 0.5f * (n[st] - n[-st]);
-                    h[2] = (qb - qf) / slab;
-                }
-                float d1, s1;
-                shade_gradient(F, g[0], g[1], g[2], &d, &spec);
-                shade_gradient(F, h[0], h[1], h[2], &d1, &s1);
-                d += w * (d1 - d);
-                spec += w * (s1 - spec);
-            } else {
-                shade_gradient(F, g[0], g[1], g[2], &d, &spec);
-            }
-            float inv = e[0] > 0.0f ? 1.0f / e[0] : 0.0f;
-            if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
-            c[0] = e[1] * inv * d + spec;
-            c[1] = e[2] * inv * d + spec;
-            c[2] = e[3] * inv * d + spec;
         }
 }
 

@@ -1,4 +1,4 @@
-/* The shading stage (shade.c): splat weights of voxels, and per sheet the
+/* The shading stage (shade.c, shade_preint.c): splat weights of voxels, and per sheet the
  * colours of the classified pixels; one function per pipeline, chosen by
  * pipeline.c. */
 #ifndef VS_SHADE_H

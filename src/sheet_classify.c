@@ -77,8 +77,9 @@ uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf 
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, sv->q + b, sv->prev + b, sv->next + b, t->stride,
                             sp->xb[y] - sp->xa[y], sv->tabs);
-        if (F->preint) vs_preint_alpha_row(F->preint, (float)F->base, sb.alpha + o, sv->q + b, sv->next + b, 1,
-                                              sp->xb[y] - sp->xa[y]);
+        if (F->preint)
+            vs_preint_alpha_row_cd(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b, sv->next + b,
+                                   sp->xb[y] - sp->xa[y]);
     }
     if (F->clip_to_volume) clip_outside(t, sv->k, sp, sb.alpha);
     if (F->cam.persp) perspective_gradients(t, sv->k, sp, sb.alpha, sb.g);
@@ -96,8 +97,8 @@ uint64_t vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf 
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, sv->q + 4 * b, sp->xb[y] - sp->xa[y], sv->tabs);
         if (F->preint)
-            vs_preint_alpha_row(F->preint, (float)F->base, sb.alpha + o, sv->q + 4 * b, sv->next + 4 * b, 4,
-                                sp->xb[y] - sp->xa[y]);
+            vs_preint_alpha_row_gs(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->q + 4 * b, sv->next + 4 * b,
+                                   sp->xb[y] - sp->xa[y]);
     }
     return classify_finish(t, sv, sb);
 }

@@ -295,6 +295,62 @@ static int check_shade(const char *isa, vs_shade_lut_fn fn, const shade_fixture 
     return 1;
 }
 
+/* the Phong terms alone over dense gradients (the pre-integrated shading
+ * packs its live pixels): n up to past three 64-pixel blocks; the outputs'
+ * guard floats must not change */
+enum { TMAX = 3 * 64 + 9 };
+static int check_shade_terms(const char *isa, vs_shade_terms_fn fn, const shade_fixture *F)
+{
+    static float g[3 * (TMAX + PAD)], dr[TMAX + PAD], dn[TMAX + PAD], sr[TMAX + PAD], sn[TMAX + PAD];
+    int cases = 0;
+    for (int n = 0; n <= TMAX; n++)
+        for (int off = 0; off < 3; off++)
+            for (int rep = 0; rep < 2; rep++) {
+                for (int i = 0; i < 3 * (TMAX + PAD); i++) g[i] = rep ? frand() * 5.0f : gcomp();
+                for (int i = 0; i < TMAX + PAD; i++) dr[i] = dn[i] = sr[i] = sn[i] = frand();
+                vs_shade_terms_scalar(dr + off, sr + off, g + 3 * off, n, &F->T);
+                fn(dn + off, sn + off, g + 3 * off, n, &F->T);
+                if (memcmp(dr, dn, sizeof dr) != 0 || memcmp(sr, sn, sizeof sr) != 0) {
+                    if (isa) CHECK(0, "shade_terms %s differs from scalar at n=%d offset=%d rep %d", isa, n, off, rep);
+                    return 0;
+                }
+                cases++;
+            }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "shade_terms", isa, cases);
+    return 1;
+}
+
+/* A pre-integration table filled with random entries over [-10, 10]:
+ * segments whose ends lie inside, on the table's ends, past them, NaN and
+ * +-Inf (densities as above) */
+enum { PN = 256 };
+static float preint_tab[4 * PN * PN] __attribute__((aligned(64)));
+static int check_preint_alpha(const char *isa, vs_preint_alpha_fn fn)
+{
+    for (int i = 0; i < 4 * PN * PN; i++) preint_tab[i] = frand() * 0.5f + 0.5f;
+    const vs_preint_tabs P = {preint_tab, -10.0f, (PN - 1) / 20.0f, PN};
+    static float f[TMAX + PAD], m[TMAX + PAD], b[TMAX + PAD], ar[TMAX + PAD], ao[TMAX + PAD];
+    int cases = 0;
+    for (int n = 0; n <= TMAX; n++)
+        for (int off = 0; off < 3; off++) {
+            for (int i = 0; i < TMAX + PAD; i++) {
+                f[i] = density();
+                m[i] = density();
+                b[i] = density();
+                ar[i] = ao[i] = frand();
+            }
+            vs_preint_alpha_scalar(ar + off, f + off, m + off, b + off, n, &P);
+            fn(ao + off, f + off, m + off, b + off, n, &P);
+            if (memcmp(ar, ao, sizeof ar) != 0) {
+                if (isa) CHECK(0, "preint_alpha %s differs from scalar at n=%d offset=%d", isa, n, off);
+                return 0;
+            }
+            cases++;
+        }
+    if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "preint_alpha", isa, cases);
+    return 1;
+}
+
 /* compositing: accumulators with opacity below, at and above the
  * threshold and at 1; alpha 0, -0, NaN, 1 and random; colours of hidden
  * pixels NaN (they must not leak); thresholds 0.5 and 1 */
@@ -353,6 +409,18 @@ static void shade_off(float *g, const float *alpha, const float *v, int vstride,
 {
     vs_shade_lut_scalar(g, alpha, v, vstride, n, T);
     if (n > 5 && alpha[5] > 0.0f) g[3 * 5 + 1] = nextafterf(g[3 * 5 + 1], INFINITY);
+}
+
+static void shade_terms_off(float *d, float *sp, const float *g, int n, const vs_shade_tabs *T)
+{
+    vs_shade_terms_scalar(d, sp, g, n, T);
+    if (n > 70) sp[70] = nextafterf(sp[70], INFINITY);
+}
+static void preint_alpha_off(float *alpha, const float *f, const float *m, const float *b, int n,
+                             const vs_preint_tabs *P)
+{
+    vs_preint_alpha_scalar(alpha, f, m, b, n, P);
+    if (n > 9) alpha[9] = nextafterf(alpha[9], INFINITY);
 }
 
 /* The dispatch honours the cap and never goes past the CPU. */
@@ -871,7 +939,8 @@ static void check_dispatch(void)
         CHECK(k.isa == want, "cap %s gave %s, expected %s", vs_isa_name((vs_isa)cap), vs_isa_name(k.isa),
               vs_isa_name(want));
         CHECK(k.splat_row1 && k.splat_row4 && k.composite && k.splat_block && k.splat_block_mix &&
-                  k.classify_cd && k.classify_gs && k.shade_lut && k.splat_voxel1 && k.splat_voxel4 &&
+                  k.classify_cd && k.classify_gs && k.shade_lut && k.shade_terms && k.preint_alpha &&
+                  k.splat_voxel1 && k.splat_voxel4 &&
                   k.splat_voxel_gs && k.splat_rows_mix && k.project_brick && k.place_voxels,
               "cap %s: empty entry",
               vs_isa_name((vs_isa)cap));
@@ -893,6 +962,10 @@ int main(void)
     CHECK(!check_classify_gs(NULL, classify_gs_off, &fx),
           "check_classify_gs cannot tell a wrong kernel from the reference");
     CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
+    CHECK(!check_shade_terms(NULL, shade_terms_off, &fx),
+          "check_shade_terms cannot tell a wrong kernel from the reference");
+    CHECK(!check_preint_alpha(NULL, preint_alpha_off),
+          "check_preint_alpha cannot tell a wrong kernel from the reference");
     CHECK(!check_composite(NULL, composite_off), "check_composite cannot tell a wrong kernel from the reference");
     CHECK(check_block_mix(NULL, block_mix_off), "check_block_mix cannot tell a wrong kernel from the reference");
     CHECK(check_project(NULL, project_off), "check_project cannot tell a wrong kernel from the reference");
@@ -923,6 +996,8 @@ int main(void)
         check_classify("avx2", vs_classify_cd_avx2, &fx);
         check_classify_gs("avx2", vs_classify_gs_avx2, &fx);
         check_shade("avx2", vs_shade_lut_avx2, &fx);
+        check_shade_terms("avx2", vs_shade_terms_avx2, &fx);
+        check_preint_alpha("avx2", vs_preint_alpha_avx2);
         check_composite("avx2", vs_composite_avx2);
         check_project("avx2", vs_project_brick_avx2);
         check_voxel("avx2", 1, vs_splat_voxel1_scalar, vs_splat_voxel1_avx2);

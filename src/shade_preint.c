@@ -1,0 +1,128 @@
+/* Shading with pre-integration (post-cd, post-gs; preintegrate.h): a
+ * pixel of sheet k stands for the ray segment to sheet k + 1, taken as two
+ * halves split at a middle density.  Each half emits the table's colour
+ * (premultiplied by its opacity) times the Phong terms where that half's
+ * opacity lies: those of the gradients at its ends (sheet k's, the
+ * middle's, sheet k + 1's) mixed by the table's opacity-weighted position;
+ * the halves are composited front over back.  Lighting a thin layer where
+ * its opacity is, rather than wherever a sheet happens to lie, keeps it
+ * from showing as rings.  (Mixing the gradients instead of their terms
+ * measured 0.5-0.6 dB worse on the translucent head.)
+ *
+ * The live pixels of a span are gathered into batches: table look-ups and
+ * the three gradients per pixel, then their Phong terms through the normal
+ * LUT in one SIMD call (kernels.h shade_terms), then the mix. */
+#include "shade.h"
+#include "preintegrate.h"
+
+#include <float.h>
+
+enum { BATCH = 64 };
+
+typedef struct batch {
+    int n;
+    int o[BATCH];              /* pixel in the tile's shade buffers          */
+    float e[BATCH][8];         /* front half, back half: opacity, r g b      */
+    float w[BATCH][2];         /* where each half's opacity lies in it, 0..1  */
+    float g[3 * BATCH * 3];    /* gradients at sheet k, the middle, sheet k + 1 */
+    float d[3 * BATCH], s[3 * BATCH];
+} batch;
+
+/* The exact-normals path: the light model on each gradient (as shade.c's
+ * shade_gradient: view space to the eye frame per mm, in float). */
+static void terms_exact(const vs_frame *F, batch *B)
+{
+    const float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
+    for (int i = 0; i < 3 * B->n; i++) {
+        const float *g = B->g + 3 * i;
+        double n[3] = {g[0] * ppm, g[1] * ppm, g[2] * zpm}, dd, ss;
+        vs_light_eval(&F->light, n, &dd, &ss);
+        B->d[i] = (float)dd;
+        B->s[i] = (float)ss;
+    }
+}
+
+static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
+{
+    if (!B->n) return;
+    if (F->s->exact_normals)
+        terms_exact(F, B);
+    else
+        F->kern.shade_terms(B->d, B->s, B->g, 3 * B->n, sv->tabs);
+    for (int j = 0; j < B->n; j++) {
+        const float *e = B->e[j];
+        const float a1 = e[0], a2 = e[4], A = vs_preint_over(a1, a2);
+        /* each half's Phong terms mixed between those at its ends */
+        const float *d = B->d + 3 * j, *sp = B->s + 3 * j, w1 = B->w[j][0], w2 = B->w[j][1];
+        const float d1 = d[0] + w1 * (d[1] - d[0]), s1 = sp[0] + w1 * (sp[1] - sp[0]);
+        const float d2 = d[1] + w2 * (d[2] - d[1]), s2 = sp[1] + w2 * (sp[2] - sp[1]);
+        float inv = A > 0.0f ? 1.0f / A : 0.0f;
+        if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
+        float *c = out + 3 * B->o[j];
+        for (int i = 0; i < 3; i++)
+            c[i] = ((e[1 + i] * d1 + a1 * s1) + (1.0f - a1) * (e[5 + i] * d2 + a2 * s2)) * inv;
+    }
+    B->n = 0;
+}
+
+void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const vs_preint *P = F->preint;
+    const spans *sp = sv->sp;
+    const int gs = F->stages->gradient_splats;
+    /* with perspective the sheets' gradients are not on one scale along
+     * the ray: each sheet is lit by its own */
+    const int mix = !F->cam.persp;
+    const float slab = (float)F->fp.slab, base = (float)F->base;
+    const ptrdiff_t st = t->stride;
+    batch B;
+    B.n = 0;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            const int o = (y - 1) * t->tw + (x - 1);
+            const size_t b = (size_t)y * t->stride + x;
+            if (!(sb.alpha[o] > 0.0f)) continue;
+            const float *g0 = sb.g + 3 * o;
+            float qf, qb, m;
+            if (gs) {
+                qf = sv->q[4 * b];
+                qb = sv->next[4 * b];
+                m = vs_preint_mid_gs(sv->q + 4 * b, sv->next + 4 * b);
+            } else {
+                qf = sv->q[b];
+                qb = sv->next[b];
+                m = vs_preint_mid_cd(sv->prev[b], qf, qb);
+            }
+            const vs_preint_at a1 = vs_preint_locate(P, qf + base, m + base),
+                               a2 = vs_preint_locate(P, m + base, qb + base);
+            float *e = B.e[B.n], *gk = B.g + 9 * B.n, *gm = gk + 3, *g1 = gk + 6;
+            vs_preint_get4(P, &a1, e);
+            vs_preint_get4(P, &a2, e + 4);
+            if (mix) {
+                /* sheet k + 1's gradient: post-gs splatted it; post-cd takes
+                 * its in-sheet differences and, as sheet k + 2 is not
+                 * splatted yet, the difference across the segment */
+                if (gs) {
+                    for (int i = 0; i < 3; i++) g1[i] = sv->next[4 * b + 1 + i] / slab;
+                } else {
+                    const float *n = sv->next + b;
+                    g1[0] = 0.5f * (n[1] - n[-1]);
+                    g1[1] = 0.5f * (n[st] - n[-st]);
+                    g1[2] = (qb - qf) / slab;
+                }
+                for (int i = 0; i < 3; i++) {
+                    gk[i] = g0[i];
+                    gm[i] = 0.5f * (g0[i] + g1[i]);
+                }
+                B.w[B.n][0] = vs_preint_position(P, &a1, e[0]);
+                B.w[B.n][1] = vs_preint_position(P, &a2, e[4]);
+            } else {
+                for (int i = 0; i < 3; i++) gk[i] = gm[i] = g1[i] = g0[i];
+                B.w[B.n][0] = B.w[B.n][1] = 0.0f;
+            }
+            B.o[B.n++] = o;
+            if (B.n == BATCH) flush(F, sv, &B, sb.g);
+        }
+    flush(F, sv, &B, sb.g);
+}
