@@ -204,7 +204,7 @@ typedef struct vs_settings {
     int has_crop;
     int crop_lo[3], crop_hi[3];
 
-    /* pre-integrated classification between sheets (post-cd, post-gs): each
+    /* pre-integrated classification between sheets (post-cd, -gs, -alpha): each
      * pixel's segment from one sheet to the next classified from both
      * densities through a 2-D table.  -1 (default): on with a transfer
      * function or an iso opacity under 1 (translucent classification) or

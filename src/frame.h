@@ -49,7 +49,7 @@ typedef struct vs_frame {
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
     const struct vs_preint *preint;  /* pre-integrated classification between
-                                        sheets (post-cd, post-gs), or NULL      */
+                                        sheets (post-cd, -gs, -alpha), or NULL  */
     /* Post-classified pipelines splat value - base (vs_volume_base: the
      * volume's minimum when negative) and add it back where a sheet is
      * classified: at the volume's faces, where fewer voxels reach, the

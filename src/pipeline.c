@@ -28,8 +28,9 @@ static const vs_stages post_gs[2] = {
      .activate = vs_activate_gradient,
      .classify = vs_classify_post_gs, .shade = vs_shade_post_exact},
 };
-/* with pre-integration between sheet k and k + 1 (post-gs then keeps sheet
- * k + 1 too); one shading function serves tables and exact normals */
+/* with pre-integration between sheet k and k + 1 (post-gs and post-alpha
+ * then keep sheet k + 1 too); one shading function serves tables and exact
+ * normals */
 static const vs_stages post_cd_pi = {.ch = 1, .ahead = 1, .weights = vs_weights_density, .raster = vs_raster1,
                                      .activate = vs_activate_density, .classify = vs_classify_post_cd,
                                      .shade = vs_shade_post_preint};
@@ -43,6 +44,10 @@ static const vs_stages post_alpha = {.ch = 4, .pre_shaded = 1, .weights = vs_wei
                                      .raster = vs_raster4, .activate = vs_activate_rgba, .classify = vs_classify_post_alpha,
                                      .shade = vs_shade_post_alpha};
 
+static const vs_stages post_alpha_pi = {.ch = 4, .ahead = 1, .pre_shaded = 1, .weights = vs_weights_post_alpha,
+                                        .raster = vs_raster4, .activate = vs_activate_rgba,
+                                        .classify = vs_classify_post_alpha, .shade = vs_shade_post_alpha_preint};
+
 const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint)
 {
     const int e = exact_normals != 0;
@@ -50,7 +55,7 @@ const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint
     case VS_PIPELINE_PRE: return &pre;
     case VS_PIPELINE_POST_CD: return preint ? &post_cd_pi : &post_cd[e];
     case VS_PIPELINE_POST_GS: return preint ? &post_gs_pi : &post_gs[e];
-    case VS_PIPELINE_POST_ALPHA: return &post_alpha;
+    case VS_PIPELINE_POST_ALPHA: return preint ? &post_alpha_pi : &post_alpha;
     default: return NULL; /* the ray caster has no sheets */
     }
 }

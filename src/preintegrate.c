@@ -193,6 +193,22 @@ void vs_preint_alpha_row_cd(const vs_preint *p, const vs_kernels *k, float base,
     }
 }
 
+void vs_preint_alpha_row_pa(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp4,
+                            const float *q4, const float *qn4, int n)
+{
+    float f[CHUNK], m[CHUNK], b[CHUNK];
+    for (int i0 = 0; i0 < n; i0 += CHUNK) {
+        const int c = n - i0 < CHUNK ? n - i0 : CHUNK;
+        for (int i = 0; i < c; i++) {
+            const size_t j = 4 * (size_t)(i0 + i) + 3;
+            f[i] = q4[j] + base;
+            m[i] = vs_preint_mid_cd(qp4[j], q4[j], qn4[j]) + base;
+            b[i] = qn4[j] + base;
+        }
+        k->preint_alpha(alpha + i0, f, m, b, c, &p->tabs);
+    }
+}
+
 void vs_preint_free(vs_preint *p)
 {
     if (!p) return;

@@ -98,9 +98,9 @@ static inline void vs_preint_lookup(const vs_preint *p, float f, float b, float 
 /* The middle of the segment from sheet k to sheet k + 1 (values without
  * the frame's base).  Post-gs: the cubic with the two sheets' densities
  * and depth derivatives (Hermite), q[3] being the splatted derivative
- * times the slab: (q + qn) / 2 + (q[3] - qn[3]) / 8.  Post-cd, whose
- * sheet k + 2 is not splatted yet: the parabola through sheets k - 1, k
- * and k + 1. */
+ * times the slab: (q + qn) / 2 + (q[3] - qn[3]) / 8.  Post-cd and
+ * post-alpha, which splat no derivative and whose sheet k + 2 is not
+ * splatted yet: the parabola through sheets k - 1, k and k + 1. */
 static inline float vs_preint_mid_gs(const float *q4, const float *qn4)
 {
     return 0.5f * (q4[0] + qn4[0]) + 0.125f * (q4[3] - qn4[3]);
@@ -137,5 +137,9 @@ void vs_preint_alpha_row_gs(const vs_preint *p, const vs_kernels *k, float base,
                             const float *qn4, int n);
 void vs_preint_alpha_row_cd(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp,
                             const float *q, const float *qn, int n);
+/* Post-alpha: four channels a pixel, the density last; the middle as
+ * post-cd's. */
+void vs_preint_alpha_row_pa(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp4,
+                            const float *q4, const float *qn4, int n);
 
 #endif

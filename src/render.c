@@ -392,7 +392,8 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         /* pre-integration pays where the classification is translucent:
          * there opacity changes within a slab faster than one sample a slab
          * follows (rings); an opaque iso-range stops at its first sheets */
-        const int post = s->pipeline == VS_PIPELINE_POST_CD || s->pipeline == VS_PIPELINE_POST_GS;
+        const int post = s->pipeline == VS_PIPELINE_POST_CD || s->pipeline == VS_PIPELINE_POST_GS ||
+                         s->pipeline == VS_PIPELINE_POST_ALPHA;
         const int want = s->preintegration >= 0 ? s->preintegration : (s->tf_count > 0 || s->iso_opacity < 1.0f);
         if (post && want) {
             if (!ctx->preint && !(ctx->preint = calloc(1, sizeof *ctx->preint))) {

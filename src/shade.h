@@ -17,6 +17,7 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 /* After any of them, with perspective: each pixel's opacity for the
  * length of its ray through the slab. */
 void vs_perspective_opacity(const tile_ctx *t, const spans *r, float *alpha);

@@ -126,3 +126,65 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
         }
     flush(F, sv, &B, sb.g);
 }
+
+/* Post-alpha's light terms at one sheet pixel: the splatted diffuse and
+ * specular over the splatted opacity (q4: diffuse, specular, opacity,
+ * density), or facing the eye where no opaque voxel is near (as
+ * vs_shade_post_alpha). */
+static inline void alpha_terms(const float *q4, float d0, float s0, float *d, float *s)
+{
+    const float a = q4[2];
+    if (a > 1e-30f && a <= FLT_MAX) {
+        *d = q4[0] / a;
+        *s = q4[1] / a;
+    } else {
+        *d = d0;
+        *s = s0;
+    }
+}
+
+/* Post-alpha with pre-integration: the segment to the next sheet in two
+ * halves as above, lit by the splatted light terms of sheet k, of sheet
+ * k + 1 and their mean at the middle, each half's two mixed at its
+ * opacity's position. */
+void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
+{
+    const vs_frame *F = t->F;
+    const vs_preint *P = F->preint;
+    const spans *sp = sv->sp;
+    const float base = (float)F->base;
+    const int mix = !F->cam.persp;
+    double n0[3] = {0.0, 0.0, 0.0}, dd, ss;
+    vs_light_eval(&F->light, n0, &dd, &ss);
+    const float d0 = (float)dd, s0 = (float)ss;
+    for (int y = sp->y0; y < sp->y1; y++)
+        for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
+            const int o = (y - 1) * t->tw + (x - 1);
+            const size_t b = 4 * ((size_t)y * t->stride + x);
+            if (!(sb.alpha[o] > 0.0f)) continue;
+            const float *q = sv->q + b, *qn = sv->next + b;
+            const float m = vs_preint_mid_cd(sv->prev[b + 3], q[3], qn[3]);
+            const vs_preint_at a1 = vs_preint_locate(P, q[3] + base, m + base),
+                               a2 = vs_preint_locate(P, m + base, qn[3] + base);
+            float e1[4], e2[4], dk, sk, dn, sn;
+            vs_preint_get4(P, &a1, e1);
+            vs_preint_get4(P, &a2, e2);
+            alpha_terms(q, d0, s0, &dk, &sk);
+            float d1 = dk, s1 = sk, d2 = dk, s2 = sk;
+            if (mix) {
+                alpha_terms(qn, d0, s0, &dn, &sn);
+                const float dm = 0.5f * (dk + dn), sm = 0.5f * (sk + sn);
+                const float w1 = vs_preint_position(P, &a1, e1[0]), w2 = vs_preint_position(P, &a2, e2[0]);
+                d1 = dk + w1 * (dm - dk);
+                s1 = sk + w1 * (sm - sk);
+                d2 = dm + w2 * (dn - dm);
+                s2 = sm + w2 * (sn - sm);
+            }
+            const float A = vs_preint_over(e1[0], e2[0]);
+            float inv = A > 0.0f ? 1.0f / A : 0.0f;
+            if (!(inv <= FLT_MAX)) inv = 0.0f;
+            float *c = sb.g + 3 * o;
+            for (int i = 0; i < 3; i++)
+                c[i] = ((e1[1 + i] * d1 + e1[0] * s1) + (1.0f - e1[0]) * (e2[1 + i] * d2 + e2[0] * s2)) * inv;
+        }
+}

@@ -65,7 +65,7 @@ static inline uint64_t classify_finish(const tile_ctx *t, const sheet_view *sv, 
 }
 
 /* Post-cd: density classified, (FH)D central differences across the
- * sheets before and after.  With pre-integration (post-cd, post-gs) the
+ * sheets before and after.  With pre-integration (post-cd, -gs, -alpha) the
  * opacity is the segment's from this sheet to the next instead. */
 uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
@@ -116,11 +116,22 @@ uint64_t vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     return classify_finish(t, sv, sb);
 }
 
-/* Post-alpha: the splatted density classified, corrected for the slab. */
+/* Post-alpha: the splatted density classified, corrected for the slab;
+ * with pre-integration, the segment to the next sheet in two halves. */
 uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
     const spans *sp = sv->sp;
+    if (F->preint) {
+        for (int y = sp->y0; y < sp->y1; y++) {
+            if (sp->xa[y] == sp->xb[y]) continue;
+            const int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+            const size_t b = 4 * ((size_t)y * t->stride + sp->xa[y]);
+            vs_preint_alpha_row_pa(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b,
+                                   sv->next + b, sp->xb[y] - sp->xa[y]);
+        }
+        return classify_finish(t, sv, sb);
+    }
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
             int o = (y - 1) * t->tw + (x - 1);

@@ -188,7 +188,7 @@ typedef struct vs_stages {
 } vs_stages;
 
 /* The table for a pipeline (exact_normals: shade post-shaded pipelines with
- * exact normals instead of the lookup tables; preint: post-cd and post-gs
+ * exact normals instead of the lookup tables; preint: post-cd, post-gs and post-alpha
  * with pre-integration between sheets, the frame's `preint`). */
 const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint);
 

@@ -86,6 +86,27 @@ int main(void)
         printf("SKIP: colin27 cases: Colin27 head not found (set VSPLAT_DATA or place ../shared/data)\n");
     }
 
+    /* translucent: pre-integrated post-shaded pipelines (the preint_alpha
+     * and shade_terms kernels), orthographic and perspective */
+    vs_volume *sphere;
+    if (vs_volume_scene(ctx, "sphere:48", &sphere) == VS_OK) {
+        static const vs_tf_point shell[] = {{0.00, 0.9f, 0.6f, 0.45f, 0.0f}, {0.22, 0.9f, 0.6f, 0.45f, 0.0f},
+                                            {0.26, 0.9f, 0.6f, 0.45f, 0.4f}, {0.32, 0.9f, 0.6f, 0.45f, 0.0f},
+                                            {0.66, 0.8f, 0.9f, 1.00f, 0.0f}, {0.72, 0.8f, 0.9f, 1.00f, 1.0f},
+                                            {1.00, 0.8f, 0.9f, 1.00f, 1.0f}};
+        vs_settings t = s;
+        t.tf = shell;
+        t.tf_count = (int)(sizeof shell / sizeof *shell);
+        t.azimuth = 25.0;
+        t.elevation = 15.0;
+        check_case("sphere translucent", sphere, &t);
+        t.perspective_fov = 40.0;
+        check_case("sphere translucent perspective", sphere, &t);
+        vs_volume_release(sphere);
+    } else {
+        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
+    }
+
     vs_volume *cell;
     if (vs_volume_scene(ctx, quick ? "cell:128" : "cell", &cell) == VS_OK) {
         vs_settings c = s;

@@ -145,8 +145,8 @@ static void test_shell(void)
         vs_volume_release(v);
         return;
     }
-    const vs_pipeline pl[2] = {VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS};
-    for (int i = 0; i < 2; i++) {
+    const vs_pipeline pl[3] = {VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS, VS_PIPELINE_POST_ALPHA};
+    for (int i = 0; i < 3; i++) {
         double db[3];
         const double slab[3] = {1.0, 1.0, 0.25};
         const int pi[3] = {0, -1, 0}; /* plain, default (on: a transfer function), plain thin */

@@ -638,7 +638,7 @@ void cli_render_usage(FILE *f)
             "  --kernel-radius R      Gaussian kernel radius, 0.5..8 (default 2)\n"
             "  --footprint-res N      footprint table entries per radius unit (default 256)\n"
             "  --seam N|auto          seam layer width in voxels (default auto)\n"
-            "  --no-preintegration    classify each sheet alone (default: post-cd and post-gs classify\n"
+            "  --no-preintegration    classify each sheet alone (default: post-cd, -gs, -alpha classify\n"
             "                         the segment to the next sheet, pre-integrated, when the\n"
             "                         classification is translucent; --preintegration always)\n"
             "leaving out work:\n"
