@@ -178,32 +178,16 @@ void vs_preint_alpha_row_gs(const vs_preint *p, const vs_kernels *k, float base,
 }
 
 void vs_preint_alpha_row_cd(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp,
-                            const float *q, const float *qn, int n)
+                            const float *q, const float *qn, int qs, int n)
 {
     float f[CHUNK], m[CHUNK], b[CHUNK];
     for (int i0 = 0; i0 < n; i0 += CHUNK) {
         const int c = n - i0 < CHUNK ? n - i0 : CHUNK;
         for (int i = 0; i < c; i++) {
-            const int j = i0 + i;
+            const size_t j = (size_t)qs * (size_t)(i0 + i);
             f[i] = q[j] + base;
             m[i] = vs_preint_mid_cd(qp[j], q[j], qn[j]) + base;
             b[i] = qn[j] + base;
-        }
-        k->preint_alpha(alpha + i0, f, m, b, c, &p->tabs);
-    }
-}
-
-void vs_preint_alpha_row_pa(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp4,
-                            const float *q4, const float *qn4, int n)
-{
-    float f[CHUNK], m[CHUNK], b[CHUNK];
-    for (int i0 = 0; i0 < n; i0 += CHUNK) {
-        const int c = n - i0 < CHUNK ? n - i0 : CHUNK;
-        for (int i = 0; i < c; i++) {
-            const size_t j = 4 * (size_t)(i0 + i) + 3;
-            f[i] = q4[j] + base;
-            m[i] = vs_preint_mid_cd(qp4[j], q4[j], qn4[j]) + base;
-            b[i] = qn4[j] + base;
         }
         k->preint_alpha(alpha + i0, f, m, b, c, &p->tabs);
     }

@@ -132,14 +132,11 @@ static inline float vs_preint_position(const vs_preint *p, const vs_preint_at *a
 /* A span's opacities, sheet k to sheet k + 1 in two halves, by the
  * kernels' preint_alpha; sheet values to which base is added
  * (vs_frame.base).  Post-gs: four channels a pixel (density, the three
- * gradient splats); post-cd: one, and the sheet before, qp. */
+ * gradient splats).  Post-cd and post-alpha: the density every qs floats
+ * (1; post-alpha 4, from its fourth channel), and the sheet before, qp. */
 void vs_preint_alpha_row_gs(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *q4,
                             const float *qn4, int n);
 void vs_preint_alpha_row_cd(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp,
-                            const float *q, const float *qn, int n);
-/* Post-alpha: four channels a pixel, the density last; the middle as
- * post-cd's. */
-void vs_preint_alpha_row_pa(const vs_preint *p, const vs_kernels *k, float base, float *alpha, const float *qp4,
-                            const float *q4, const float *qn4, int n);
+                            const float *q, const float *qn, int qs, int n);
 
 #endif

@@ -79,7 +79,7 @@ uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf 
                             sp->xb[y] - sp->xa[y], sv->tabs);
         if (F->preint)
             vs_preint_alpha_row_cd(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b, sv->next + b,
-                                   sp->xb[y] - sp->xa[y]);
+                                   1, sp->xb[y] - sp->xa[y]);
     }
     if (F->clip_to_volume) clip_outside(t, sv->k, sp, sb.alpha);
     if (F->cam.persp) perspective_gradients(t, sv->k, sp, sb.alpha, sb.g);
@@ -126,9 +126,9 @@ uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_b
         for (int y = sp->y0; y < sp->y1; y++) {
             if (sp->xa[y] == sp->xb[y]) continue;
             const int o = (y - 1) * t->tw + (sp->xa[y] - 1);
-            const size_t b = 4 * ((size_t)y * t->stride + sp->xa[y]);
-            vs_preint_alpha_row_pa(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b,
-                                   sv->next + b, sp->xb[y] - sp->xa[y]);
+            const size_t b = 4 * ((size_t)y * t->stride + sp->xa[y]) + 3; /* the density */
+            vs_preint_alpha_row_cd(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b,
+                                   sv->next + b, 4, sp->xb[y] - sp->xa[y]);
         }
         return classify_finish(t, sv, sb);
     }

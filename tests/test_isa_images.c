@@ -54,6 +54,17 @@ static void check_case(const char *name, const vs_volume *v, const vs_settings *
     }
 }
 
+/* orthographic, then with a 40-degree perspective */
+static void check_views(const char *name, const vs_volume *v, const vs_settings *base)
+{
+    char label[96];
+    vs_settings s = *base;
+    check_case(name, v, &s);
+    s.perspective_fov = 40.0;
+    snprintf(label, sizeof label, "%s perspective", name);
+    check_case(label, v, &s);
+}
+
 int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 2;
@@ -78,9 +89,7 @@ int main(void)
         h.ramp = 10.0;
         h.azimuth = 150.0; /* not along an axis */
         h.elevation = 20.0;
-        check_case("colin27", head, &h);
-        h.perspective_fov = 40.0;
-        check_case("colin27 perspective", head, &h);
+        check_views("colin27", head, &h);
         vs_volume_release(head);
     } else {
         printf("SKIP: colin27 cases: Colin27 head not found (set VSPLAT_DATA or place ../shared/data)\n");
@@ -99,9 +108,7 @@ int main(void)
         t.tf_count = (int)(sizeof shell / sizeof *shell);
         t.azimuth = 25.0;
         t.elevation = 15.0;
-        check_case("sphere translucent", sphere, &t);
-        t.perspective_fov = 40.0;
-        check_case("sphere translucent perspective", sphere, &t);
+        check_views("sphere translucent", sphere, &t);
         vs_volume_release(sphere);
     } else {
         CHECK(0, "sphere scene: %s", vs_last_error(ctx));

@@ -121,6 +121,23 @@ static void test_table(void)
     vs_volume_release(v);
 }
 
+/* The reference the translucent scenes are measured against: the
+ * exact-Gaussian ray caster, step 0.05, 160^2, a view off the axes. */
+static vs_settings truth_settings(const vs_tf_point *tf, int n)
+{
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 160;
+    s.azimuth = 20;
+    s.elevation = 15;
+    s.tf = tf;
+    s.tf_count = n;
+    s.pipeline = VS_PIPELINE_RAYCAST;
+    s.ray_step = 0.05;
+    s.ray_analytic = 0;
+    return s;
+}
+
 /* The sphere with the shell against the exact-Gaussian ray caster (the
  * field splatting reconstructs, so what differs is the sampling along the
  * ray): pre-integration must beat plain sheets of the same thickness by a
@@ -129,16 +146,7 @@ static void test_shell(void)
 {
     vs_volume *v = tu_scene(ctx, "sphere:48");
     if (!v) return;
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 160;
-    s.azimuth = 20;
-    s.elevation = 15;
-    s.tf = shell_tf;
-    s.tf_count = (int)(sizeof shell_tf / sizeof *shell_tf);
-    s.pipeline = VS_PIPELINE_RAYCAST;
-    s.ray_step = 0.05;
-    s.ray_analytic = 0;
+    vs_settings s = truth_settings(shell_tf, (int)(sizeof shell_tf / sizeof *shell_tf));
     vs_image truth;
     if (!render(v, &s, &truth)) {
         tu_failures++;
@@ -261,16 +269,7 @@ static void test_curved(void)
                                 {0.47, 0.90f, 0.60f, 0.45f, 0.4f}, {0.53, 0.90f, 0.60f, 0.45f, 0.4f},
                                 {0.57, 0.90f, 0.60f, 0.45f, 0.0f}, {0.78, 0.80f, 0.90f, 1.00f, 0.0f},
                                 {0.82, 0.80f, 0.90f, 1.00f, 1.0f}, {1.00, 0.80f, 0.90f, 1.00f, 1.0f}};
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 160;
-    s.azimuth = 20;
-    s.elevation = 15;
-    s.tf = band;
-    s.tf_count = (int)(sizeof band / sizeof *band);
-    s.pipeline = VS_PIPELINE_RAYCAST;
-    s.ray_step = 0.05;
-    s.ray_analytic = 0;
+    vs_settings s = truth_settings(band, (int)(sizeof band / sizeof *band));
     vs_image truth, pi, plain;
     if (render(v, &s, &truth)) {
         s.pipeline = VS_PIPELINE_POST_GS;
