@@ -1,13 +1,14 @@
-/* Shading with pre-integration (post-cd, post-gs; preintegrate.h): a
- * pixel of sheet k stands for the ray segment to sheet k + 1, taken as two
- * halves split at a middle density.  Each half emits the table's colour
- * (premultiplied by its opacity) times the Phong terms where that half's
- * opacity lies: those of the gradients at its ends (sheet k's, the
- * middle's, sheet k + 1's) mixed by the table's opacity-weighted position;
- * the halves are composited front over back.  Lighting a thin layer where
- * its opacity is, rather than wherever a sheet happens to lie, keeps it
- * from showing as rings.  (Mixing the gradients instead of their terms
- * measured 0.5-0.6 dB worse on the translucent head.)
+/* Shading with pre-integration (post-cd, post-gs, post-alpha;
+ * preintegrate.h): a pixel of sheet k stands for the ray segment to sheet
+ * k + 1, taken as two halves split at a middle density.  Each half emits
+ * the table's colour (premultiplied by its opacity) times the Phong terms
+ * where that half's opacity lies: those of the gradients at its ends
+ * (sheet k's, the middle's, sheet k + 1's) mixed by the table's
+ * opacity-weighted position; the halves are composited front over back.
+ * Lighting a thin layer where its opacity is, rather than wherever a sheet
+ * happens to lie, keeps it from showing as rings.  (Mixing the gradients
+ * instead of their terms measured 0.5-0.6 dB worse on the translucent
+ * head.)  Post-alpha mixes its splatted light terms the same way.
  *
  * The live pixels of a span are gathered into batches: table look-ups and
  * the three gradients per pixel, then their Phong terms through the normal
@@ -21,6 +22,8 @@ enum { BATCH = 64 };
 
 typedef struct batch {
     int n;
+    int per;                   /* gradients a pixel: 3, or 1 where the ends
+                                  are not mixed (perspective)              */
     int o[BATCH];              /* pixel in the tile's shade buffers          */
     float e[BATCH][8];         /* front half, back half: opacity, r g b      */
     float w[BATCH][2];         /* where each half's opacity lies in it, 0..1  */
@@ -33,7 +36,7 @@ typedef struct batch {
 static void terms_exact(const vs_frame *F, batch *B)
 {
     const float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
-    for (int i = 0; i < 3 * B->n; i++) {
+    for (int i = 0; i < B->per * B->n; i++) {
         const float *g = B->g + 3 * i;
         double n[3] = {g[0] * ppm, g[1] * ppm, g[2] * zpm}, dd, ss;
         vs_light_eval(&F->light, n, &dd, &ss);
@@ -48,14 +51,20 @@ static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
     if (F->s->exact_normals)
         terms_exact(F, B);
     else
-        F->kern.shade_terms(B->d, B->s, B->g, 3 * B->n, sv->tabs);
+        F->kern.shade_terms(B->d, B->s, B->g, B->per * B->n, sv->tabs);
     for (int j = 0; j < B->n; j++) {
         const float *e = B->e[j];
         const float a1 = e[0], a2 = e[4], A = vs_preint_over(a1, a2);
         /* each half's Phong terms mixed between those at its ends */
-        const float *d = B->d + 3 * j, *sp = B->s + 3 * j, w1 = B->w[j][0], w2 = B->w[j][1];
-        const float d1 = d[0] + w1 * (d[1] - d[0]), s1 = sp[0] + w1 * (sp[1] - sp[0]);
-        const float d2 = d[1] + w2 * (d[2] - d[1]), s2 = sp[1] + w2 * (sp[2] - sp[1]);
+        const float *d = B->d + B->per * j, *sp = B->s + B->per * j;
+        float d1 = d[0], s1 = sp[0], d2 = d[0], s2 = sp[0];
+        if (B->per == 3) {
+            const float w1 = B->w[j][0], w2 = B->w[j][1];
+            d1 = d[0] + w1 * (d[1] - d[0]);
+            s1 = sp[0] + w1 * (sp[1] - sp[0]);
+            d2 = d[1] + w2 * (d[2] - d[1]);
+            s2 = sp[1] + w2 * (sp[2] - sp[1]);
+        }
         float inv = A > 0.0f ? 1.0f / A : 0.0f;
         if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
         float *c = out + 3 * B->o[j];
@@ -72,12 +81,13 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const spans *sp = sv->sp;
     const int gs = F->stages->gradient_splats;
     /* with perspective the sheets' gradients are not on one scale along
-     * the ray: each sheet is lit by its own */
+     * the ray: each sheet is lit by its own, one gradient a pixel */
     const int mix = !F->cam.persp;
     const float slab = (float)F->fp.slab, base = (float)F->base;
     const ptrdiff_t st = t->stride;
     batch B;
     B.n = 0;
+    B.per = mix ? 3 : 1;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
             const int o = (y - 1) * t->tw + (x - 1);
@@ -96,10 +106,11 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             }
             const vs_preint_at a1 = vs_preint_locate(P, qf + base, m + base),
                                a2 = vs_preint_locate(P, m + base, qb + base);
-            float *e = B.e[B.n], *gk = B.g + 9 * B.n, *gm = gk + 3, *g1 = gk + 6;
+            float *e = B.e[B.n], *gk = B.g + 3 * B.per * B.n;
             vs_preint_get4(P, &a1, e);
             vs_preint_get4(P, &a2, e + 4);
             if (mix) {
+                float *gm = gk + 3, *g1 = gk + 6;
                 /* sheet k + 1's gradient: post-gs splatted it; post-cd takes
                  * its in-sheet differences and, as sheet k + 2 is not
                  * splatted yet, the difference across the segment */
@@ -118,8 +129,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 B.w[B.n][0] = vs_preint_position(P, &a1, e[0]);
                 B.w[B.n][1] = vs_preint_position(P, &a2, e[4]);
             } else {
-                for (int i = 0; i < 3; i++) gk[i] = gm[i] = g1[i] = g0[i];
-                B.w[B.n][0] = B.w[B.n][1] = 0.0f;
+                for (int i = 0; i < 3; i++) gk[i] = g0[i];
             }
             B.o[B.n++] = o;
             if (B.n == BATCH) flush(F, sv, &B, sb.g);
@@ -153,7 +163,6 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
     const vs_preint *P = F->preint;
     const spans *sp = sv->sp;
     const float base = (float)F->base;
-    const int mix = !F->cam.persp;
     double n0[3] = {0.0, 0.0, 0.0}, dd, ss;
     vs_light_eval(&F->light, n0, &dd, &ss);
     const float d0 = (float)dd, s0 = (float)ss;
@@ -170,16 +179,11 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
             vs_preint_get4(P, &a1, e1);
             vs_preint_get4(P, &a2, e2);
             alpha_terms(q, d0, s0, &dk, &sk);
-            float d1 = dk, s1 = sk, d2 = dk, s2 = sk;
-            if (mix) {
-                alpha_terms(qn, d0, s0, &dn, &sn);
-                const float dm = 0.5f * (dk + dn), sm = 0.5f * (sk + sn);
-                const float w1 = vs_preint_position(P, &a1, e1[0]), w2 = vs_preint_position(P, &a2, e2[0]);
-                d1 = dk + w1 * (dm - dk);
-                s1 = sk + w1 * (sm - sk);
-                d2 = dm + w2 * (dn - dm);
-                s2 = sm + w2 * (sn - sm);
-            }
+            alpha_terms(qn, d0, s0, &dn, &sn);
+            const float dm = 0.5f * (dk + dn), sm = 0.5f * (sk + sn);
+            const float w1 = vs_preint_position(P, &a1, e1[0]), w2 = vs_preint_position(P, &a2, e2[0]);
+            const float d1 = dk + w1 * (dm - dk), s1 = sk + w1 * (sm - sk);
+            const float d2 = dm + w2 * (dn - dm), s2 = sm + w2 * (sn - sm);
             const float A = vs_preint_over(e1[0], e2[0]);
             float inv = A > 0.0f ? 1.0f / A : 0.0f;
             if (!(inv <= FLT_MAX)) inv = 0.0f;

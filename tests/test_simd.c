@@ -320,33 +320,46 @@ static int check_shade_terms(const char *isa, vs_shade_terms_fn fn, const shade_
     return 1;
 }
 
-/* A pre-integration table filled with random entries over [-10, 10]:
- * segments whose ends lie inside, on the table's ends, past them, NaN and
- * +-Inf (densities as above) */
+/* A pre-integration table filled with random entries over [-10, 10] and
+ * over [0, 20]: segments whose ends lie inside, on the cells' edges, on
+ * and past the table's ends, NaN and +-Inf (densities as above) */
 enum { PN = 256 };
 static float preint_tab[4 * PN * PN] __attribute__((aligned(64)));
 static int check_preint_alpha(const char *isa, vs_preint_alpha_fn fn)
 {
     for (int i = 0; i < 4 * PN * PN; i++) preint_tab[i] = frand() * 0.5f + 0.5f;
-    const vs_preint_tabs P = {preint_tab, -10.0f, (PN - 1) / 20.0f, PN};
     static float f[TMAX + PAD], m[TMAX + PAD], b[TMAX + PAD], ar[TMAX + PAD], ao[TMAX + PAD];
     int cases = 0;
-    for (int n = 0; n <= TMAX; n++)
-        for (int off = 0; off < 3; off++) {
-            for (int i = 0; i < TMAX + PAD; i++) {
-                f[i] = density();
-                m[i] = density();
-                b[i] = density();
-                ar[i] = ao[i] = frand();
+    /* two domains: [-10, 10], and [0, 20], where -0 and 0 give x = -0 and +0 */
+    for (int dom = 0; dom < 2; dom++) {
+        const vs_preint_tabs P = {preint_tab, dom ? 0.0f : -10.0f, (PN - 1) / 20.0f, PN};
+        for (int n = 0; n <= TMAX; n++)
+            for (int off = 0; off < 3; off++) {
+                for (int i = 0; i < TMAX + PAD; i++) {
+                    f[i] = density();
+                    m[i] = density();
+                    b[i] = density();
+                    ar[i] = ao[i] = frand();
+                }
+                /* the cells' edges: x = +-0, just below 0, and values at and
+                 * next to x = n - 2 and n - 1, where the cell stops growing */
+                const float top = P.vmin + (float)(PN - 2) / P.scale, end = P.vmin + (float)(PN - 1) / P.scale;
+                const float edge[8] = {-0.0f, 0.0f, P.vmin, nextafterf(P.vmin, -INFINITY), top,
+                                       nextafterf(top, INFINITY), nextafterf(top, -INFINITY), end};
+                for (int i = 0; i < 8 && 3 * i + 2 + off < n; i++) {
+                    f[3 * i + off] = edge[i];
+                    m[3 * i + 1 + off] = edge[(i + 3) % 8];
+                    b[3 * i + 2 + off] = edge[(i + 5) % 8];
+                }
+                vs_preint_alpha_scalar(ar + off, f + off, m + off, b + off, n, &P);
+                fn(ao + off, f + off, m + off, b + off, n, &P);
+                if (memcmp(ar, ao, sizeof ar) != 0) {
+                    if (isa) CHECK(0, "preint_alpha %s differs from scalar at n=%d offset=%d domain %d", isa, n, off, dom);
+                    return 0;
+                }
+                cases++;
             }
-            vs_preint_alpha_scalar(ar + off, f + off, m + off, b + off, n, &P);
-            fn(ao + off, f + off, m + off, b + off, n, &P);
-            if (memcmp(ar, ao, sizeof ar) != 0) {
-                if (isa) CHECK(0, "preint_alpha %s differs from scalar at n=%d offset=%d", isa, n, off);
-                return 0;
-            }
-            cases++;
-        }
+    }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "preint_alpha", isa, cases);
     return 1;
 }
