@@ -138,9 +138,7 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
     }
     p->vmin = c->vmin;
     p->scale = (VS_PREINT_N - 1) / (c->vmax - c->vmin);
-    p->fvmin = (float)p->vmin;
-    p->fscale = (float)p->scale;
-    p->tabs = (vs_preint_tabs){p->tab, p->fvmin, p->fscale, VS_PREINT_N};
+    p->tabs = (vs_preint_tabs){p->tab, (float)p->vmin, (float)p->scale, VS_PREINT_N};
     build_job J = {p, c, slab, &P};
     const int ntask = (VS_PREINT_N + ROWS - 1) / ROWS;
     if (pool)

@@ -22,7 +22,6 @@
 
 typedef struct vs_preint {
     double vmin, scale;   /* coordinate x = (v - vmin) * scale, in [0, N-1] */
-    float fvmin, fscale;  /* the same in float, for the per-pixel look-ups  */
     /* [front][back] of (opacity of the segment, the colour it emits r g b,
      * premultiplied by that opacity, so that interpolating next to a
      * transparent entry does not darken); four floats an entry, one
@@ -37,7 +36,8 @@ typedef struct vs_preint {
     float key_color[VS_TF_TABLE][3];
     double key_vmin, key_scale, key_slab;
     double ms_build;      /* time of the last build */
-    vs_preint_tabs tabs;  /* tab, fvmin, fscale as the kernels take them */
+    vs_preint_tabs tabs;  /* tab, and vmin, scale in float, for the per-pixel
+                             look-ups (those in src/ and the kernels) */
 } vs_preint;
 
 struct vs_pool;

@@ -239,6 +239,8 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const vs_frame *F = t->F;
     const spans *sp = sv->sp;
     const float *q = sv->q;
+    float d0, s0;
+    vs_post_alpha_eye(F, &d0, &s0);
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
             int o = (y - 1) * t->tw + (x - 1);
@@ -246,16 +248,7 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;
             float d, spec, rgb[3];
-            const float a = q[4 * b + 2];
-            if (a > 1e-30f && a <= FLT_MAX) {
-                d = q[4 * b] / a;
-                spec = q[4 * b + 1] / a;
-            } else { /* no opaque voxel near: lit as facing the eye */
-                double n[3] = {0.0, 0.0, 0.0}, dd, ss;
-                vs_light_eval(&F->light, n, &dd, &ss);
-                d = (float)dd;
-                spec = (float)ss;
-            }
+            vs_post_alpha_terms(q + 4 * b, d0, s0, &d, &spec);
             lookup_color(F, q[4 * b + 3] + (float)F->base, rgb);
             for (int i = 0; i < 3; i++) c[i] = rgb[i] * d + spec;
         }

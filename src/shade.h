@@ -6,6 +6,8 @@
 
 #include "tile.h"
 
+#include <float.h>
+
 /* Splat weights (the pipeline table's `weights`). */
 void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w[][4]);
 void vs_weights_pre(const vs_frame *F, const pend *p, unsigned live, float w[][4]);
@@ -18,6 +20,29 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+/* Post-alpha's light terms at a sheet pixel q4 (splatted diffuse and
+ * specular times opacity, the opacity, the density): the splatted terms
+ * over the splatted opacity, or (d0, s0), the light facing the eye, where
+ * no opaque voxel is near (vs_post_alpha_eye gives them once a sheet). */
+static inline void vs_post_alpha_terms(const float *q4, float d0, float s0, float *d, float *s)
+{
+    const float a = q4[2];
+    if (a > 1e-30f && a <= FLT_MAX) {
+        *d = q4[0] / a;
+        *s = q4[1] / a;
+    } else {
+        *d = d0;
+        *s = s0;
+    }
+}
+static inline void vs_post_alpha_eye(const vs_frame *F, float *d0, float *s0)
+{
+    double n[3] = {0.0, 0.0, 0.0}, dd, ss;
+    vs_light_eval(&F->light, n, &dd, &ss);
+    *d0 = (float)dd;
+    *s0 = (float)ss;
+}
+
 /* After any of them, with perspective: each pixel's opacity for the
  * length of its ray through the slab. */
 void vs_perspective_opacity(const tile_ctx *t, const spans *r, float *alpha);

@@ -45,6 +45,17 @@ static void terms_exact(const vs_frame *F, batch *B)
     }
 }
 
+/* A pixel's colour from its two halves e (front: opacity, premultiplied
+ * r g b; back: the same), each lit by Phong terms d, s: the halves front
+ * over back, over their joint opacity. */
+static inline void emit_halves(const float e[8], float d1, float s1, float d2, float s2, float c[3])
+{
+    const float a1 = e[0], a2 = e[4], A = vs_preint_over(a1, a2);
+    float inv = A > 0.0f ? 1.0f / A : 0.0f;
+    if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
+    for (int i = 0; i < 3; i++) c[i] = ((e[1 + i] * d1 + a1 * s1) + (1.0f - a1) * (e[5 + i] * d2 + a2 * s2)) * inv;
+}
+
 static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
 {
     if (!B->n) return;
@@ -53,8 +64,6 @@ static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
     else
         F->kern.shade_terms(B->d, B->s, B->g, B->per * B->n, sv->tabs);
     for (int j = 0; j < B->n; j++) {
-        const float *e = B->e[j];
-        const float a1 = e[0], a2 = e[4], A = vs_preint_over(a1, a2);
         /* each half's Phong terms mixed between those at its ends */
         const float *d = B->d + B->per * j, *sp = B->s + B->per * j;
         float d1 = d[0], s1 = sp[0], d2 = d[0], s2 = sp[0];
@@ -65,11 +74,7 @@ static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
             d2 = d[1] + w2 * (d[2] - d[1]);
             s2 = sp[1] + w2 * (sp[2] - sp[1]);
         }
-        float inv = A > 0.0f ? 1.0f / A : 0.0f;
-        if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
-        float *c = out + 3 * B->o[j];
-        for (int i = 0; i < 3; i++)
-            c[i] = ((e[1 + i] * d1 + a1 * s1) + (1.0f - a1) * (e[5 + i] * d2 + a2 * s2)) * inv;
+        emit_halves(B->e[j], d1, s1, d2, s2, out + 3 * B->o[j]);
     }
     B->n = 0;
 }
@@ -137,22 +142,6 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     flush(F, sv, &B, sb.g);
 }
 
-/* Post-alpha's light terms at one sheet pixel: the splatted diffuse and
- * specular over the splatted opacity (q4: diffuse, specular, opacity,
- * density), or facing the eye where no opaque voxel is near (as
- * vs_shade_post_alpha). */
-static inline void alpha_terms(const float *q4, float d0, float s0, float *d, float *s)
-{
-    const float a = q4[2];
-    if (a > 1e-30f && a <= FLT_MAX) {
-        *d = q4[0] / a;
-        *s = q4[1] / a;
-    } else {
-        *d = d0;
-        *s = s0;
-    }
-}
-
 /* Post-alpha with pre-integration: the segment to the next sheet in two
  * halves as above, lit by the splatted light terms of sheet k, of sheet
  * k + 1 and their mean at the middle, each half's two mixed at its
@@ -163,9 +152,8 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
     const vs_preint *P = F->preint;
     const spans *sp = sv->sp;
     const float base = (float)F->base;
-    double n0[3] = {0.0, 0.0, 0.0}, dd, ss;
-    vs_light_eval(&F->light, n0, &dd, &ss);
-    const float d0 = (float)dd, s0 = (float)ss;
+    float d0, s0;
+    vs_post_alpha_eye(F, &d0, &s0);
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
             const int o = (y - 1) * t->tw + (x - 1);
@@ -175,20 +163,14 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
             const float m = vs_preint_mid_cd(sv->prev[b + 3], q[3], qn[3]);
             const vs_preint_at a1 = vs_preint_locate(P, q[3] + base, m + base),
                                a2 = vs_preint_locate(P, m + base, qn[3] + base);
-            float e1[4], e2[4], dk, sk, dn, sn;
-            vs_preint_get4(P, &a1, e1);
-            vs_preint_get4(P, &a2, e2);
-            alpha_terms(q, d0, s0, &dk, &sk);
-            alpha_terms(qn, d0, s0, &dn, &sn);
+            float e[8], dk, sk, dn, sn;
+            vs_preint_get4(P, &a1, e);
+            vs_preint_get4(P, &a2, e + 4);
+            vs_post_alpha_terms(q, d0, s0, &dk, &sk);
+            vs_post_alpha_terms(qn, d0, s0, &dn, &sn);
             const float dm = 0.5f * (dk + dn), sm = 0.5f * (sk + sn);
-            const float w1 = vs_preint_position(P, &a1, e1[0]), w2 = vs_preint_position(P, &a2, e2[0]);
-            const float d1 = dk + w1 * (dm - dk), s1 = sk + w1 * (sm - sk);
-            const float d2 = dm + w2 * (dn - dm), s2 = sm + w2 * (sn - sm);
-            const float A = vs_preint_over(e1[0], e2[0]);
-            float inv = A > 0.0f ? 1.0f / A : 0.0f;
-            if (!(inv <= FLT_MAX)) inv = 0.0f;
-            float *c = sb.g + 3 * o;
-            for (int i = 0; i < 3; i++)
-                c[i] = ((e1[1 + i] * d1 + e1[0] * s1) + (1.0f - e1[0]) * (e2[1 + i] * d2 + e2[0] * s2)) * inv;
+            const float w1 = vs_preint_position(P, &a1, e[0]), w2 = vs_preint_position(P, &a2, e[4]);
+            emit_halves(e, dk + w1 * (dm - dk), sk + w1 * (sm - sk), dm + w2 * (dn - dm), sm + w2 * (sn - sm),
+                        sb.g + 3 * o);
         }
 }
