@@ -87,15 +87,11 @@ int bench_frame(const bench_opts *bo, int argc, char **argv)
 
     cli_settle_view(&o, vol); /* the frames turn from the first one's view */
     vs_tf_point *tf = NULL;
-    if (o.tf_path) { /* after the volume: .1dt spreads over its range */
-        st = vs_tf_load_for_volume(ctx, o.tf_path, vol, &tf, &o.s.tf_count);
-        if (st != VS_OK) {
-            fprintf(stderr, "vsplat-bench: %s\n", vs_last_error(ctx));
-            vs_volume_release(vol);
-            vs_context_release(ctx);
-            return 1;
-        }
-        o.s.tf = tf;
+    if ((st = cli_load_tf(ctx, &o, vol, &tf)) != VS_OK) {
+        fprintf(stderr, "vsplat-bench: %s\n", vs_last_error(ctx));
+        vs_volume_release(vol);
+        vs_context_release(ctx);
+        return 1;
     }
     vs_settings s = o.s;
     vs_image img = {0, 0, NULL};

@@ -676,3 +676,15 @@ void cli_info_usage(FILE *f)
             "(index to RAS millimetres, three rows), one 'key: value' per line.  Raw input: --dims and\n"
             "--type, or a name like NAME_XxYxZ_TYPE.raw (TYPE u8, i16, u16, f32; +le/be)\n");
 }
+
+vs_status cli_load_tf(vs_context *ctx, cli_opts *o, const vs_volume *vol, vs_tf_point **tf)
+{
+    *tf = NULL;
+    if (!o->tf_path) return VS_OK;
+    int n = 0;
+    const vs_status st = vs_tf_load_for_volume(ctx, o->tf_path, vol, tf, &n);
+    if (st != VS_OK) return st;
+    o->s.tf = *tf;
+    o->s.tf_count = n;
+    return VS_OK;
+}

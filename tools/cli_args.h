@@ -47,6 +47,11 @@ int cli_frame_name(const char *out, int frame, char *buf, size_t cap);
  * that frame 1 turns from frame 0's view, not from the back. */
 void cli_settle_view(cli_opts *o, const vs_volume *vol);
 
+/* --tf, once the volume is known (a .1dt spreads over its range): the
+ * transfer function into o->s (tf, tf_count), *tf set to what the caller
+ * frees with vs_tf_free.  VS_OK and *tf NULL without --tf. */
+vs_status cli_load_tf(vs_context *ctx, cli_opts *o, const vs_volume *vol, vs_tf_point **tf);
+
 /* Output format from the extension (.png, .exr, .tif, .tiff, .gif; any
  * case): returns a short name ("png", "exr", "tiff", "gif") or NULL. */
 const char *cli_output_format(const char *path);

@@ -390,9 +390,8 @@ static int run(int rank, int n, int argc, char **argv)
         }
     }
     if (rank == 0 && o.tf_path) { /* the whole volume, or rank 0's slab with the whole range */
-        st = vs_tf_load_for_volume(ctx, o.tf_path, full, &tf, &o.s.tf_count);
+        st = cli_load_tf(ctx, &o, full, &tf);
         if (st != VS_OK) lib_fail(&sp, ctx, st, o.tf_path);
-        o.s.tf = tf;
     }
     if (rank == 0 && n > 1) {
         if (!sp.rc) resolve_classification(ctx, full, &o.s, &P.alo, &P.ahi, &sp);

@@ -445,17 +445,11 @@ static int cmd_render(int argc, char **argv)
 
     /* --tf: the .1dt format needs the volume's value range, so load it now. */
     vs_tf_point *tf = NULL;
-    if (o.tf_path) {
-        int n = 0;
-        st = vs_tf_load_for_volume(ctx, o.tf_path, vol, &tf, &n);
-        if (st != VS_OK) {
-            rc = report(ctx, st, o.tf_path);
-            vs_volume_release(vol);
-            vs_context_release(ctx);
-            return rc;
-        }
-        o.s.tf = tf;
-        o.s.tf_count = n;
+    if ((st = cli_load_tf(ctx, &o, vol, &tf)) != VS_OK) {
+        rc = report(ctx, st, o.tf_path);
+        vs_volume_release(vol);
+        vs_context_release(ctx);
+        return rc;
     }
 
     /* Non-finite voxels (NaN, Inf) are accepted and rendered as 0 (README
