@@ -237,20 +237,14 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     size_t count = 0, nonempty = 0;
     for (int bk = 0; bk < nb[2]; bk++) count += slab_count[bk];
     free(slab_count);
-    if (count > UINT32_MAX) {
-        free(mask);
-        free(pos);
-        return vs_set_error(ctx, VS_ERR_TOO_LARGE, "relevant voxels: %zu voxels exceed the limit", count);
-    }
     for (size_t b = 0; b < nbt; b++) nonempty += pos[b] != 0;
-    vs_voxel *vox = old ? vs_relevant_take((void **)&old->voxels, count * sizeof *vox) : malloc((count ? count : 1) * sizeof *vox);
-    vs_brick *bricks = malloc((nonempty ? nonempty : 1) * sizeof *bricks);
-    if (!vox || !bricks) {
+    vs_voxel *vox;
+    vs_brick *bricks;
+    const vs_status st = vs_relevant_lists(ctx, old, count, nonempty, &vox, &bricks);
+    if (st != VS_OK) {
         free(mask);
         free(pos);
-        free(vox);
-        free(bricks);
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
+        return st;
     }
     /* prefix sums: pos[b] becomes the first slot of brick b */
     uint32_t run = 0;

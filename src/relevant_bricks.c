@@ -353,15 +353,14 @@ static vs_status compact_sparse(vs_context *ctx, struct vs_pool *pool, const spa
         count += S->counts[t];
         nonempty += S->counts[t] != 0;
     }
-    if (count > UINT32_MAX)
-        return vs_set_error(ctx, VS_ERR_TOO_LARGE, "relevant voxels: %zu voxels exceed the limit", count);
-    vs_voxel *vox = old ? vs_relevant_take((void **)&old->voxels, count * sizeof *vox) : malloc((count ? count : 1) * sizeof *vox);
-    vs_brick *bricks = malloc((nonempty ? nonempty : 1) * sizeof *bricks);
+    vs_voxel *vox;
+    vs_brick *bricks;
+    const vs_status st = vs_relevant_lists(ctx, old, count, nonempty, &vox, &bricks);
+    if (st != VS_OK) return st;
     uint32_t *start = malloc((nreg ? nreg : 1) * sizeof *start);
-    if (!vox || !bricks || !start) {
+    if (!start) {
         free(vox);
         free(bricks);
-        free(start);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
     }
     uint32_t run = 0;

@@ -1,10 +1,11 @@
 /* What the two builds of the relevant-voxel list share (relevant.c, the
  * whole grid at once; relevant_bricks.c, brick by brick): the class of a
- * value against the opacity range, and buffer reuse. */
+ * value against the opacity range, buffer reuse and the list's arrays. */
 #ifndef VS_RELEVANT_CLASS_H
 #define VS_RELEVANT_CLASS_H
 
 #include "classify.h"
+#include "context.h"
 #include "relevant.h"
 
 #include <math.h>
@@ -35,6 +36,28 @@ static inline void *vs_relevant_take(void **old, size_t bytes)
     void *p = realloc(*old, bytes ? bytes : 1);
     if (p) *old = NULL;
     return p;
+}
+
+/* The list's arrays for count voxels in nonempty bricks (the voxels in
+ * old's array when there is one): VS_OK, or the error set and both NULL
+ * when the count passes 2^32 - 1 or memory runs out. */
+static inline vs_status vs_relevant_lists(vs_context *ctx, vs_relevant_cache *old, size_t count, size_t nonempty,
+                                          vs_voxel **vox, vs_brick **bricks)
+{
+    *vox = NULL;
+    *bricks = NULL;
+    if (count > UINT32_MAX)
+        return vs_set_error(ctx, VS_ERR_TOO_LARGE, "relevant voxels: %zu voxels exceed the limit", count);
+    vs_voxel *v = old ? vs_relevant_take((void **)&old->voxels, count * sizeof *v) : malloc((count ? count : 1) * sizeof *v);
+    vs_brick *b = malloc((nonempty ? nonempty : 1) * sizeof *b);
+    if (!v || !b) {
+        free(v);
+        free(b);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
+    }
+    *vox = v;
+    *bricks = b;
+    return VS_OK;
 }
 
 /* The grid of VS_BRICK^3 bricks over dims d: nb per axis; returns them all. */
