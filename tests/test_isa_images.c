@@ -65,6 +65,21 @@ static void check_views(const char *name, const vs_volume *v, const vs_settings 
     check_case(label, v, &s);
 }
 
+/* A synthetic scene's cases (with the perspective view too if asked). */
+static void scene_case(const char *spec, const char *name, const vs_settings *s, int perspective_too)
+{
+    vs_volume *v;
+    if (vs_volume_scene(ctx, spec, &v) != VS_OK) {
+        CHECK(0, "%s scene: %s", spec, vs_last_error(ctx));
+        return;
+    }
+    if (perspective_too)
+        check_views(name, v, s);
+    else
+        check_case(name, v, s);
+    vs_volume_release(v);
+}
+
 int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 2;
@@ -97,33 +112,21 @@ int main(void)
 
     /* translucent: pre-integrated post-shaded pipelines (the preint_alpha
      * and shade_terms kernels), orthographic and perspective */
-    vs_volume *sphere;
-    if (vs_volume_scene(ctx, "sphere:48", &sphere) == VS_OK) {
-        static const vs_tf_point shell[] = {{0.00, 0.9f, 0.6f, 0.45f, 0.0f}, {0.22, 0.9f, 0.6f, 0.45f, 0.0f},
-                                            {0.26, 0.9f, 0.6f, 0.45f, 0.4f}, {0.32, 0.9f, 0.6f, 0.45f, 0.0f},
-                                            {0.66, 0.8f, 0.9f, 1.00f, 0.0f}, {0.72, 0.8f, 0.9f, 1.00f, 1.0f},
-                                            {1.00, 0.8f, 0.9f, 1.00f, 1.0f}};
-        vs_settings t = s;
-        t.tf = shell;
-        t.tf_count = (int)(sizeof shell / sizeof *shell);
-        t.azimuth = 25.0;
-        t.elevation = 15.0;
-        check_views("sphere translucent", sphere, &t);
-        vs_volume_release(sphere);
-    } else {
-        CHECK(0, "sphere scene: %s", vs_last_error(ctx));
-    }
+    static const vs_tf_point shell[] = {{0.00, 0.9f, 0.6f, 0.45f, 0.0f}, {0.22, 0.9f, 0.6f, 0.45f, 0.0f},
+                                        {0.26, 0.9f, 0.6f, 0.45f, 0.4f}, {0.32, 0.9f, 0.6f, 0.45f, 0.0f},
+                                        {0.66, 0.8f, 0.9f, 1.00f, 0.0f}, {0.72, 0.8f, 0.9f, 1.00f, 1.0f},
+                                        {1.00, 0.8f, 0.9f, 1.00f, 1.0f}};
+    vs_settings t = s;
+    t.tf = shell;
+    t.tf_count = (int)(sizeof shell / sizeof *shell);
+    t.azimuth = 25.0;
+    t.elevation = 15.0;
+    scene_case("sphere:48", "sphere translucent", &t, 1);
 
-    vs_volume *cell;
-    if (vs_volume_scene(ctx, quick ? "cell:128" : "cell", &cell) == VS_OK) {
-        vs_settings c = s;
-        c.azimuth = 30.0;
-        c.elevation = 40.0;
-        check_case("cell (anisotropic)", cell, &c);
-        vs_volume_release(cell);
-    } else {
-        CHECK(0, "cell scene: %s", vs_last_error(ctx));
-    }
+    vs_settings c = s;
+    c.azimuth = 30.0;
+    c.elevation = 40.0;
+    scene_case(quick ? "cell:128" : "cell", "cell (anisotropic)", &c, 0);
     vs_context_release(ctx);
     TEST_DONE();
 }
