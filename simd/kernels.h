@@ -55,6 +55,17 @@ static inline int vs_preint_cell(const vs_preint_tabs *P, float v, float *frac)
     return i;
 }
 
+/* Channel c of the table at entry idx = i n + j, bilinear with the
+ * fractions (fx along front, fy along back): the one formula every
+ * look-up follows. */
+static inline float vs_preint_bilerp(const vs_preint_tabs *P, size_t idx, float fx, float fy, int c)
+{
+    const float *e00 = P->tab + 4 * idx + c, *e10 = e00 + 4 * (size_t)P->n;
+    const float u = e00[0] + fy * (e00[4] - e00[0]);
+    const float v = e10[0] + fy * (e10[4] - e10[0]);
+    return u + fx * (v - u);
+}
+
 /* Entries of the classification tables (VS_TF_TABLE in classify.h). */
 #define VS_KTAB 4096
 

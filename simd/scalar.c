@@ -153,10 +153,7 @@ static inline float preint_alpha1(const vs_preint_tabs *P, float f, float b)
 {
     float fx, fy;
     const int i = vs_preint_cell(P, f, &fx), j = vs_preint_cell(P, b, &fy);
-    const float *e00 = P->tab + 4 * ((size_t)i * (size_t)P->n + (size_t)j), *e10 = e00 + 4 * P->n;
-    const float u = e00[0] + fy * (e00[4] - e00[0]);
-    const float v = e10[0] + fy * (e10[4] - e10[0]);
-    return u + fx * (v - u);
+    return vs_preint_bilerp(P, (size_t)i * (size_t)P->n + (size_t)j, fx, fy, 0);
 }
 
 void vs_preint_alpha_scalar(float *alpha, const float *f, const float *m, const float *b, int n,

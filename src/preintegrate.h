@@ -65,10 +65,7 @@ static inline vs_preint_at vs_preint_locate(const vs_preint *p, float f, float b
 /* Channel c of the table at a (0 opacity, 1..3 premultiplied colour). */
 static inline float vs_preint_get(const vs_preint *p, const vs_preint_at *a, int c)
 {
-    const float *e00 = p->tab + 4 * a->idx + c, *e10 = e00 + 4 * VS_PREINT_N;
-    const float u = e00[0] + a->fy * (e00[4] - e00[0]);
-    const float v = e10[0] + a->fy * (e10[4] - e10[0]);
-    return u + a->fx * (v - u);
+    return vs_preint_bilerp(&p->tabs, a->idx, a->fx, a->fy, c);
 }
 
 /* All four channels at a, the same values as vs_preint_get (the same
