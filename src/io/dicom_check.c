@@ -105,6 +105,15 @@ vs_status vs_dicom_check(vs_context *ctx, const char *path)
                               path, group, elem);
             break;
         }
+        /* command elements (group 0000) belong to network messages, never
+         * to a file (PS3.10): a file that starts with them is not DICOM.
+         * GDCM, given one whose "DICM" sat a byte off its place, read it
+         * with VRs guessed and took over 2 GB for 1203 bytes (fuzz_dicom) */
+        if (group == 0x0000u) {
+            st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: malformed DICOM: command element (0000,%04x) in a file", path,
+                              elem);
+            break;
+        }
         /* an item belongs in a sequence: GDCM, meeting one in the data set
          * itself, rereads the file with VRs guessed and took 4 GB for a
          * 1194-byte one (fuzz_dicom) */
