@@ -221,6 +221,16 @@ typedef struct vs_settings {
      * levels are built on first use and kept in the context.  Not with a
      * crop box (full resolution there). */
     double lod_pixels;
+
+    /* anisotropic grids (voxels thicker along an axis, by 1.25x or more)
+     * splatted from a copy on cubic voxels of the finest spacing, filtered
+     * so that it reconstructs the same Gaussian field (and the levels of
+     * detail made from it): an ellipsoidal kernel seen obliquely places
+     * every sheet's section on its own, a cubic one shares one footprint.
+     * Built on first use, kept in the context.  -1 (default): when the
+     * copy is at most the volume's size plus 64 MB; 1: whatever its size;
+     * 0: never.  Not with a crop box, and not for sheared grids. */
+    int resample;
 } vs_settings;
 
 typedef struct vs_stage_times {
@@ -267,6 +277,10 @@ typedef struct vs_stats {
     double ms_lod;             /* building levels of detail (if any were built)  */
     int lod_level;             /* level splatted: 0 full resolution, L: voxels
                                   2^L times the volume's spacing apart        */
+    double ms_resample;        /* resampling to cubic voxels (if it was done)   */
+    int resampled;             /* 1: the cubic copy (or a level of detail made
+                                  from it) was splatted (settings' resample);
+                                  voxels_total is the volume's               */
 } vs_stats;
 
 /* A rendered image: straight RGBA float, row 0 at the top. */

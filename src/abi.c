@@ -28,7 +28,7 @@ static const size_t settings_ends[] = {
     END_S(tile_size), END_S(exact_normals), END_S(normal_lut_size), END_S(threads), END_S(isa), END_S(pin),
     END_S(ray_step), END_S(ray_trilinear), END_S(ray_analytic), END_S(progress), END_S(progress_user), END_S(trace),
     END_S(view), END_S(has_up), END_S(up), END_S(roll), END_S(has_crop), END_S(crop_lo), END_S(crop_hi),
-    END_S(preintegration), END_S(lod_pixels)};
+    END_S(preintegration), END_S(lod_pixels), END_S(resample)};
 static const size_t stats_ends[] = {
     END_T(pipeline), END_T(isa), END_T(threads), END_T(width), END_T(height), END_T(voxels_total),
     END_T(voxels_relevant), END_T(voxels_splatted), END_T(voxels_culled), END_T(sheets),
@@ -36,14 +36,14 @@ static const size_t stats_ends[] = {
     END_T(iso_lo), END_T(iso_hi), END_T(ramp), END_T(pin_warning), END_T(bricks_culled),
     END_T(voxels_projected), END_T(voxels_tested), END_T(footprint_floats), END_T(pixels_classified),
     END_T(pixels_shaded), END_T(bytes_read), END_T(bytes_written), END_T(ms_lod),
-    END_T(lod_level)};
+    END_T(lod_level), END_T(ms_resample), END_T(resampled)};
 static const size_t load_ends[] = {END_L(raw),         END_L(dims),    END_L(type),  END_L(endian),
                                    END_L(has_spacing), END_L(spacing), END_L(series)};
 
 #define ROUND(n, T) (((n) + _Alignof(T) - 1) / _Alignof(T) * _Alignof(T))
-_Static_assert(ROUND(END_S(lod_pixels), vs_settings) == sizeof(vs_settings),
+_Static_assert(ROUND(END_S(resample), vs_settings) == sizeof(vs_settings),
                "a field appended to vs_settings: add it to settings_ends");
-_Static_assert(ROUND(END_T(lod_level), vs_stats) == sizeof(vs_stats),
+_Static_assert(ROUND(END_T(resampled), vs_stats) == sizeof(vs_stats),
                "a field appended to vs_stats: add it to stats_ends");
 _Static_assert(ROUND(END_L(series), vs_load_options) == sizeof(vs_load_options),
                "a field appended to vs_load_options: add it to load_ends");
@@ -80,6 +80,7 @@ vs_status vs_settings_import(vs_context *ctx, const vs_settings *s, vs_settings 
     /* a program built before levels of detail renders as it did: it has
      * no field to turn them off */
     if (s->struct_size < END_S(lod_pixels)) full->lod_pixels = 0.0;
+    if (s->struct_size < END_S(resample)) full->resample = 0; /* nor to resample */
     return VS_OK;
 }
 

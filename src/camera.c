@@ -126,6 +126,13 @@ static int grid_frame(const struct vs_volume *vol, double Q[3][3], int perm[3], 
     return err < 1e-6 ? 2 : 0;
 }
 
+int vs_camera_grid_orthonormal(const struct vs_volume *vol)
+{
+    double Q[3][3], sign[3];
+    int perm[3];
+    return grid_frame(vol, Q, perm, sign) != 0;
+}
+
 static int invert3(const double m[3][3], double o[3][3])
 {
     double c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];

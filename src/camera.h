@@ -95,4 +95,8 @@ static inline double vs_camera_ray_length(const vs_camera *cam, double x, double
     return sqrt(1.0 + u * u + v * v);
 }
 
+/* 1 when the volume's grid axes are orthogonal (a rotation or a signed
+ * permutation of the world's, whatever their spacing), 0 when sheared. */
+int vs_camera_grid_orthonormal(const struct vs_volume *vol);
+
 #endif

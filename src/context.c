@@ -4,6 +4,7 @@
 #include "pool.h"
 #include "preintegrate.h"
 #include "lod.h"
+#include "resample.h"
 #include "relevant.h"
 
 #include <dlfcn.h>
@@ -28,6 +29,7 @@ void vs_context_release(vs_context *ctx)
     vs_pool_destroy(ctx->pool);
     vs_relevant_cache_free(ctx->relevant);
     vs_lod_cache_free(ctx->lod);
+    vs_resample_cache_free(ctx->resample);
     if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
     free(ctx->shade_lut);
     vs_preint_free(ctx->preint);
@@ -71,6 +73,7 @@ void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_s
     s->occlusion = 1;
     s->preintegration = -1;
     s->lod_pixels = 1.0;
+    s->resample = -1;
     s->occlusion_threshold = 0.995;
     s->tile_counters = 1;
     s->tile_size = 64;

@@ -10,6 +10,7 @@
 struct vs_pool;
 struct vs_relevant_cache;
 struct vs_lod_cache;
+struct vs_resample_cache;
 struct vs_shade_lut;
 struct vs_context {
     char error[1024]; /* room for a list of the series in a DICOM folder */
@@ -18,6 +19,7 @@ struct vs_context {
     int pool_pin;
     struct vs_relevant_cache *relevant; /* relevant-voxel list, reused          */
     struct vs_lod_cache *lod;           /* levels of detail of the last volume  */
+    struct vs_resample_cache *resample; /* its copy on cubic voxels, if anisotropic */
     uint64_t otsu_serial;               /* default iso (Otsu) of the volume with
                                            this serial (0: none): a full pass
                                            over the volume, once, not per frame */

@@ -108,31 +108,6 @@ static const float taps[4] = {0.125f, 0.375f, 0.375f, 0.125f};
 
 static inline int clampi(int v, int hi) { return v < 0 ? 0 : v > hi ? hi : v; }
 
-/* rounded to nearest (half away from zero) and saturated to the type */
-static inline float round_clamp(float x, float lo, float hi)
-{
-    x = x < lo ? lo : x > hi ? hi : x;
-    return x >= 0.0f ? x + 0.5f : x - 0.5f; /* truncated by the cast */
-}
-
-static void store_row(struct vs_volume *v, size_t at, const float *x, int n)
-{
-    switch (v->type) {
-    case VS_U8:
-        for (int i = 0; i < n; i++) ((uint8_t *)v->data)[at + i] = (uint8_t)round_clamp(x[i], 0.0f, 255.0f);
-        break;
-    case VS_I16:
-        for (int i = 0; i < n; i++)
-            ((int16_t *)v->data)[at + i] = (int16_t)round_clamp(x[i], -32768.0f, 32767.0f);
-        break;
-    case VS_U16:
-        for (int i = 0; i < n; i++) ((uint16_t *)v->data)[at + i] = (uint16_t)round_clamp(x[i], 0.0f, 65535.0f);
-        break;
-    default: memcpy((float *)v->data + at, x, (size_t)n * sizeof *x);
-    }
-}
-
-
 /* row = sum of w[t] * row jj of input plane p[t], as float */
 #define ZSUM(T, CONV)                                                                                              \
     do {                                                                                                           \
@@ -211,7 +186,7 @@ static void down_plane(void *arg, int worker, int k)
             }
             x = xo;
         }
-        store_row(J->out, ((size_t)k * o[1] + j) * o[0], x, o[0]);
+        vs_volume_store_floats(J->out, ((size_t)k * o[1] + j) * o[0], x, o[0]);
     }
 }
 

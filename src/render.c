@@ -7,6 +7,7 @@
 #include "timing.h"
 #include "finish.h"
 #include "lod.h"
+#include "resample.h"
 #include "pool.h"
 #include "preintegrate.h"
 #include "tile.h"
@@ -140,6 +141,8 @@ static vs_status check_settings(vs_context *ctx, const vs_settings *s)
     if (!(s->lod_pixels >= 0.0 && s->lod_pixels <= 1e6))
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "lod_pixels %g must lie in [0, 1e6] (0: full resolution)",
                             s->lod_pixels);
+    if (s->resample < -1 || s->resample > 1)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "resample must be -1 (auto), 0 or 1");
     return VS_OK;
 }
 
@@ -573,31 +576,50 @@ fail:
     return rc;
 }
 
-/* The level of detail the view asks for (lod.h), then the frame. */
+/* The copy on cubic voxels an anisotropic grid needs (resample.h), the
+ * level of detail the view asks for (lod.h), then the frame. */
 static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_settings *s, vs_image *out,
                             vs_stats *st)
 {
-    int level = 0;
-    double ms_lod = 0.0, lod_span[2] = {0.0, 0.0};
-    const vs_volume *lv = vol;
-    vs_settings ls;
+    int level = 0, resampled = 0;
+    double ms_lod = 0.0, ms_resample = 0.0, span[2] = {0.0, 0.0};
+    const vs_volume *base = vol, *lv = vol;
+    struct vs_relevant_cache **rel = &ctx->relevant;
+    vs_settings rs, ls;
+    /* an anisotropic grid: its copy on cubic voxels (resample.h) is what
+     * is splatted, at full resolution and as the levels' source, unless it
+     * cannot be made (out of memory: the grid as it is) */
+    if (vs_resample_wanted(vol, s)) {
+        vs_status rc = vs_context_pool(ctx, s);
+        if (rc != VS_OK) return rc;
+        span[0] = vs_now_ms();
+        if (vs_resample_get(ctx, ctx->pool, &ctx->resample, vol, &base, &ms_resample) == VS_OK) {
+            vs_resample_settings(vol, base, s, &rs);
+            s = &rs;
+            rel = &ctx->resample->relevant;
+            resampled = 1;
+        } else {
+            base = vol;
+        }
+        lv = base;
+    }
     if (s->lod_pixels > 0.0 && !s->has_crop) {
         vs_camera cam;
-        vs_status rc = vs_camera_setup(ctx, vol, s, &cam);
+        vs_status rc = vs_camera_setup(ctx, base, s, &cam);
         if (rc != VS_OK) return rc;
-        level = vs_lod_choose(vol, s, &cam);
+        level = vs_lod_choose(base, s, &cam);
         if (level > 0) {
             if ((rc = vs_context_pool(ctx, s)) != VS_OK) return rc;
-            lod_span[0] = vs_now_ms();
-            if (vs_lod_get(ctx, ctx->pool, &ctx->lod, vol, level, &lv, &ms_lod) != VS_OK) {
+            if (!resampled) span[0] = vs_now_ms();
+            if (vs_lod_get(ctx, ctx->pool, &ctx->lod, base, level, &lv, &ms_lod) != VS_OK) {
                 /* out of memory, or a level the volume's limits refuse:
                  * the frame at full resolution rather than none */
                 level = 0;
-                lv = vol;
+                lv = base;
             }
         }
         if (level > 0) {
-            vs_lod_settings(vol, lv, s, &ls);
+            vs_lod_settings(base, lv, s, &ls);
             /* an iso-surface's ramp spans fewer voxels of a coarser level:
              * one sample a sheet draws its contours as rings, which the
              * pre-integrated segments between sheets do not (Colin27 at
@@ -605,15 +627,17 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
              * rendered at 512x512 and box-filtered) */
             if (ls.preintegration < 0) ls.preintegration = 1;
             s = &ls;
+            rel = &ctx->lod->relevant[level];
         }
     }
-    lod_span[1] = vs_now_ms();
-    vs_status rc = render_splat(ctx, lv, vol, level ? &ctx->lod->relevant[level] : &ctx->relevant, s, out, st,
-                                ms_lod > 0.0 ? lod_span : NULL);
+    span[1] = vs_now_ms();
+    vs_status rc = render_splat(ctx, lv, vol, rel, s, out, st, ms_lod + ms_resample > 0.0 ? span : NULL);
     if (rc == VS_OK && st) {
         st->lod_level = level;
         st->ms_lod = ms_lod;
-        st->ms_total += ms_lod;
+        st->ms_resample = ms_resample;
+        st->resampled = resampled;
+        st->ms_total += ms_lod + ms_resample;
     }
     return rc;
 }

@@ -193,6 +193,8 @@ size_t vs_stats_to_json(const vs_stats *st, char *buf, size_t cap)
     }
     if (HAS(ms_lod)) kv_dbl(&o, "ms_lod", st->ms_lod);
     if (HAS(lod_level)) kv_int(&o, "lod_level", st->lod_level);
+    if (HAS(ms_resample)) kv_dbl(&o, "ms_resample", st->ms_resample);
+    if (HAS(resampled)) kv_int(&o, "resampled", st->resampled);
 #undef HAS
     key(&o, "  ", "version");
     put_json_string(&o, VS_VERSION_STRING);

@@ -317,3 +317,27 @@ double vs_volume_default_iso(const vs_volume *v)
     vs_volume_histogram(v, hist);
     return vs_histogram_iso(hist, v->vmin, v->vmax);
 }
+
+/* rounded to nearest (half away from zero) and saturated to the type */
+static inline float round_clamp(float x, float lo, float hi)
+{
+    x = x < lo ? lo : x > hi ? hi : x;
+    return x >= 0.0f ? x + 0.5f : x - 0.5f; /* truncated by the cast */
+}
+
+void vs_volume_store_floats(struct vs_volume *v, size_t at, const float *x, int n)
+{
+    switch (v->type) {
+    case VS_U8:
+        for (int i = 0; i < n; i++) ((uint8_t *)v->data)[at + i] = (uint8_t)round_clamp(x[i], 0.0f, 255.0f);
+        break;
+    case VS_I16:
+        for (int i = 0; i < n; i++)
+            ((int16_t *)v->data)[at + i] = (int16_t)round_clamp(x[i], -32768.0f, 32767.0f);
+        break;
+    case VS_U16:
+        for (int i = 0; i < n; i++) ((uint16_t *)v->data)[at + i] = (uint16_t)round_clamp(x[i], 0.0f, 65535.0f);
+        break;
+    default: memcpy((float *)v->data + at, x, (size_t)n * sizeof *x);
+    }
+}

@@ -109,4 +109,8 @@ void vs_volume_new_serial(struct vs_volume *v);
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out);
 
+/* Store n floats from linear index `at` on: rounded to nearest and
+ * saturated for the integer types (filtered copies: levels, resampling). */
+void vs_volume_store_floats(struct vs_volume *v, size_t at, const float *x, int n);
+
 #endif

@@ -80,7 +80,7 @@ enum opt_id {
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
-    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD
+    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD, O_RESAMPLE
 };
 
 typedef struct opt_def {
@@ -129,6 +129,7 @@ static const opt_def opt_table[] = {
     {"--no-preintegration", 0, O_NO_PREINT, 0},
     {"--lod", 1, O_LOD, 0},
     {"--no-lod", 0, O_NO_LOD, 0},
+    {"--resample", 1, O_RESAMPLE, 0},
     {"--ray-step", 1, O_RAY_STEP, 0},
     {"--trilinear", 0, O_TRILINEAR, 0},
     {"--no-analytic", 0, O_NO_ANALYTIC, 0},
@@ -381,6 +382,12 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_NO_PREINT: s->preintegration = 0; return 0;
     case O_LOD: return parse_range_double(n, v, 0.0, 1e6, 0, &s->lod_pixels, err, cap);
     case O_NO_LOD: s->lod_pixels = 0.0; return 0;
+    case O_RESAMPLE:
+        if (!strcmp(v, "auto")) s->resample = -1;
+        else if (!strcmp(v, "on")) s->resample = 1;
+        else if (!strcmp(v, "off")) s->resample = 0;
+        else return fail(err, cap, "--resample: expected auto, on or off, got '%s'", v);
+        return 0;
     case O_NORMAL_LUT: return parse_range_int(n, v, 8, 65536, &s->normal_lut_size, err, cap);
     case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
     case O_TRILINEAR: s->ray_trilinear = 1; return 0;
@@ -645,6 +652,9 @@ void cli_render_usage(FILE *f)
             "  --lod PX               levels of detail: splat a filtered copy of the volume whose\n"
             "                         voxels lie at most PX pixels apart (default 1)\n"
             "  --no-lod               full resolution however small the volume is seen\n"
+            "  --resample auto|on|off anisotropic voxels (1.25x thicker along an axis or more):\n"
+            "                         splat a copy on cubic voxels that reconstructs the same\n"
+            "                         field (auto: if it needs at most the volume's memory + 64 MB)\n"
             "  --no-occlusion         no early splat elimination\n"
             "  --occlusion-threshold T  opacity above which a pixel is occluded (default 0.995)\n"
             "  --no-tiles             no tile counters: shade every tile of every sheet\n"

@@ -310,9 +310,11 @@ static int run(int rank, int n, int argc, char **argv)
         if (rank == 0) cli_render_usage(stdout);
         return 0;
     }
-    /* bricks render at full resolution (docs/DISTRIBUTED.md), one rank too */
+    /* bricks render at full resolution and anisotropic grids as stored
+     * (docs/DISTRIBUTED.md), one rank too */
     o.s.lod_pixels = 0.0;
     const char *unsupported = o.turntable > 0                        ? "--turntable"
+                              : o.s.resample > 0                     ? "--resample on"
                               : o.trace_path                         ? "--trace"
                               : o.s.pipeline == VS_PIPELINE_RAYCAST  ? "--pipeline raycast"
                               : !strcmp(cli_output_format(o.output), "gif") ? "GIF output"
@@ -321,6 +323,7 @@ static int run(int rank, int n, int argc, char **argv)
         if (rank == 0) fprintf(stderr, "vsplat-mpi: %s is not supported by vsplat-mpi (use vsplat)\n", unsupported);
         return EXIT_USAGE;
     }
+    o.s.resample = 0;
     const double t_start = MPI_Wtime();
     vs_context *ctx = NULL;
     vs_status st = vs_context_create(&ctx);

@@ -35,7 +35,7 @@ int main(void)
     F(vs_settings, progress_user); F(vs_settings, trace);
     F(vs_settings, view); F(vs_settings, has_up); F(vs_settings, up); F(vs_settings, roll);
     F(vs_settings, has_crop); F(vs_settings, crop_lo); F(vs_settings, crop_hi); F(vs_settings, preintegration);
-    F(vs_settings, lod_pixels);
+    F(vs_settings, lod_pixels); F(vs_settings, resample);
     END();
     BEGIN(vs_stats);
     F(vs_stats, struct_size); F(vs_stats, pipeline); F(vs_stats, isa); F(vs_stats, threads); F(vs_stats, width);
@@ -45,7 +45,8 @@ int main(void)
     F(vs_stats, iso_hi); F(vs_stats, ramp); F(vs_stats, pin_warning); F(vs_stats, bricks_culled);
     F(vs_stats, voxels_projected); F(vs_stats, voxels_tested); F(vs_stats, footprint_floats);
     F(vs_stats, pixels_classified); F(vs_stats, pixels_shaded); F(vs_stats, bytes_read);
-    F(vs_stats, bytes_written); F(vs_stats, ms_lod); F(vs_stats, lod_level);
+    F(vs_stats, bytes_written); F(vs_stats, ms_lod); F(vs_stats, lod_level); F(vs_stats, ms_resample);
+    F(vs_stats, resampled);
     END();
     BEGIN(vs_load_options);
     F(vs_load_options, struct_size); F(vs_load_options, raw); F(vs_load_options, dims); F(vs_load_options, type);

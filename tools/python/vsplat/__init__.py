@@ -363,7 +363,8 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
               "cancelled"); called on this thread between tiles
     **settings  any other field of vs_settings (vsplat.h) by name, e.g.
               slab=0.5, exact_normals=True, occlusion=False, tile_size=32,
-              lod_pixels=0 (full resolution however small the volume is seen)
+              lod_pixels=0 (full resolution however small the volume is seen),
+              resample=0 (anisotropic voxels splatted as stored)
 
     The GIL is released while the frame renders.
     """

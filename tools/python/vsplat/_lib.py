@@ -59,6 +59,7 @@ class Settings(ctypes.Structure):
         ("has_crop", c_int), ("crop_lo", c_int * 3), ("crop_hi", c_int * 3),
         ("preintegration", c_int),
         ("lod_pixels", c_double),
+        ("resample", c_int),
     ]
 
 
@@ -84,6 +85,7 @@ class Stats(ctypes.Structure):
         ("footprint_floats", c_uint64), ("pixels_classified", c_uint64), ("pixels_shaded", c_uint64),
         ("bytes_read", StageBytes), ("bytes_written", StageBytes),
         ("ms_lod", c_double), ("lod_level", c_int),
+        ("ms_resample", c_double), ("resampled", c_int),
     ]
 
 
