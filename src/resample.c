@@ -7,6 +7,7 @@
 #include "relevant.h"
 #include "timing.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,21 +35,26 @@ static double between_sigma(const struct vs_volume *vol, int a, double fine)
     const double ratio = vol->spacing[a] / fine;
     return thick(vol, a, fine) ? kernel_sigma() * sqrt(ratio * ratio - 1.0) / ratio : 0.0;
 }
-static int pad_voxels(const struct vs_volume *vol, int a, double fine)
+static double pad_voxels(const struct vs_volume *vol, int a, double fine)
 {
-    return (int)ceil(4.0 * between_sigma(vol, a, fine) * vol->spacing[a] / fine);
+    return ceil(4.0 * between_sigma(vol, a, fine) * vol->spacing[a] / fine);
 }
 
 /* The copy's size along each axis: the volume's extent between its first
  * and last voxel centres in voxels of the finest spacing, centred on the
- * volume's centre, and past each end the voxels the field still reaches
- * there (the thick axis's kernel reaches further out than the cubic one). */
-static void cubic_dims(const struct vs_volume *vol, double fine, int d[3])
+ * volume's centre, and past each end as far as the filter between the
+ * grids reaches (4 sigma: where the thick kernels still weigh).  0 when
+ * a size would not fit an int. */
+static int cubic_dims(const struct vs_volume *vol, double fine, int d[3])
 {
-    for (int a = 0; a < 3; a++)
-        d[a] = thick(vol, a, fine)
-                   ? (int)lround((vol->dims[a] - 1) * vol->spacing[a] / fine) + 1 + 2 * pad_voxels(vol, a, fine)
-                   : vol->dims[a];
+    for (int a = 0; a < 3; a++) {
+        const double n = thick(vol, a, fine)
+                             ? nearbyint((vol->dims[a] - 1) * vol->spacing[a] / fine) + 1.0 + 2.0 * pad_voxels(vol, a, fine)
+                             : vol->dims[a];
+        if (!(n <= INT_MAX)) return 0;
+        d[a] = (int)n;
+    }
+    return 1;
 }
 
 int vs_resample_wanted(const struct vs_volume *vol, const vs_settings *s)
@@ -65,13 +71,13 @@ int vs_resample_wanted(const struct vs_volume *vol, const vs_settings *s)
     }
     if (!any || !vs_camera_grid_orthonormal(vol)) return 0; /* a sheared grid stays sheared */
     int d[3];
-    cubic_dims(vol, fine, d);
+    if (!cubic_dims(vol, fine, d)) return 0;
     double n = 1.0, n0 = 1.0;
     for (int a = 0; a < 3; a++) n *= d[a], n0 *= vol->dims[a];
     if (n > 4e18) return 0;
     const double bytes = n * (double)vs_type_size(vol->type), bytes0 = n0 * (double)vs_type_size(vol->type);
-    /* auto: within the memory budget of the volume plus as much again
-     * and 64 MB (the copy is kept beside the caller's volume) */
+    /* auto: a copy of at most the volume's size plus 64 MB (it is kept
+     * beside the caller's volume) */
     return s->resample > 0 || bytes <= bytes0 + 64.0 * (1 << 20);
 }
 
@@ -231,7 +237,8 @@ static vs_status build_cubic(vs_context *ctx, struct vs_pool *pool, const struct
     const double fine = finest(vol);
     int d[3];
     double sp[3];
-    cubic_dims(vol, fine, d);
+    if (!cubic_dims(vol, fine, d))
+        return vs_set_error(ctx, VS_ERR_TOO_LARGE, "resampling to cubic voxels: the copy would be too large");
     for (int a = 0; a < 3; a++) sp[a] = thick(vol, a, fine) ? fine : vol->spacing[a];
     resample_job J = {.in = vol, .base = (float)vs_volume_base(vol)};
     struct vs_volume *cv = NULL;
@@ -278,9 +285,12 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
     *ms = 0.0;
     *out = NULL;
     vs_resample_cache *c = *cache;
-    /* new voxels or a new geometry: a new copy (its size follows the spacing) */
+    /* new voxels, a new geometry (the copy's size follows the spacing) or a
+     * new value outside the volume (its padding and NaN hold it: a new
+     * range can move it): a new copy */
     if (c && (c->vol != vol || c->data_serial != vol->data_serial || memcmp(c->spacing, vol->spacing, sizeof c->spacing) ||
-              memcmp(c->affine, vol->affine, sizeof c->affine) || c->has_orientation != vol->has_orientation)) {
+              memcmp(c->affine, vol->affine, sizeof c->affine) || c->has_orientation != vol->has_orientation ||
+              c->base != vs_volume_base(vol))) {
         vs_resample_cache_free(c);
         c = *cache = NULL;
     }
@@ -299,6 +309,7 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
         memcpy(c->spacing, vol->spacing, sizeof c->spacing);
         memcpy(c->affine, vol->affine, sizeof c->affine);
         c->has_orientation = vol->has_orientation;
+        c->base = vs_volume_base(vol);
         *cache = c;
         *ms = vs_now_ms() - t0;
     } else if (c->serial != vol->serial) {

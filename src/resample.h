@@ -20,6 +20,7 @@ typedef struct vs_resample_cache {
     uint64_t serial, data_serial;    /* its serials when the copy was made or ranged */
     double spacing[3], affine[3][4]; /* its geometry when the copy was made */
     int has_orientation;
+    double base;                     /* its value outside the volume, which the copy holds */
     struct vs_volume *cubic;         /* the copy on cubic voxels */
     struct vs_relevant_cache *relevant; /* the copy's relevant voxels */
 } vs_resample_cache;

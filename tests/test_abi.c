@@ -168,6 +168,46 @@ static void test_lod_default(vs_context *ctx)
     vs_volume_release(v);
 }
 
+/* A program built before the copy on cubic voxels splats an anisotropic
+ * grid as stored; one built with it gets the copy by default. */
+static void test_resample_default(vs_context *ctx)
+{
+    const int d[3] = {24, 24, 12};
+    const double sp[3] = {1, 1, 2};
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, VS_U8, d, sp, &v) == VS_OK, "create");
+    if (!v) return;
+    unsigned char *f = vs_volume_data(v);
+    for (int k = 0; k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++) {
+                const double x = i - 11.5, y = j - 11.5, z = 2 * (k - 5.5);
+                f[(k * d[1] + j) * d[0] + i] = x * x + y * y + z * z < 64 ? 200 : 0;
+            }
+    vs_volume_update_range(v);
+    const size_t cut = ROUND8(END(vs_settings, lod_pixels));
+    void *base;
+    vs_settings *old = guarded(cut, &base);
+    vs_settings_init_sized(old, cut, sizeof(vs_stats));
+    old->width = old->height = 48;
+    old->azimuth = 30;
+    old->elevation = 30;
+    vs_settings now;
+    vs_settings_init(&now);
+    now.width = now.height = 48;
+    now.azimuth = 30;
+    now.elevation = 30;
+    vs_image a = {0, 0, NULL}, b = {0, 0, NULL};
+    vs_stats sa, sb;
+    CHECK(vs_render(ctx, v, old, &a, &sa) == VS_OK && vs_render(ctx, v, &now, &b, &sb) == VS_OK, "render: %s",
+          vs_last_error(ctx));
+    CHECK(sa.resampled == 0 && sb.resampled == 1, "copy: older layout %d, current %d", sa.resampled, sb.resampled);
+    vs_image_free(&a);
+    vs_image_free(&b);
+    unguard(base);
+    vs_volume_release(v);
+}
+
 /* Render with settings cut after various fields and stats cut likewise:
  * the same image and counts as the full layout with the missing fields at
  * their defaults, no byte read or written past either struct. */
@@ -207,6 +247,7 @@ static void test_older_layouts_render(vs_context *ctx, const vs_volume *vol)
         if (has_progress) ref.progress_user = &calls_ref;
         /* older programs render at full resolution (docs/ABI.md) */
         if (n < END(vs_settings, lod_pixels)) ref.lod_pixels = 0.0;
+        if (n < END(vs_settings, resample)) ref.resample = 0;
 
         unsigned char *st = canaried(m);
         vs_image a = {0, 0, NULL}, b = {0, 0, NULL};
@@ -361,6 +402,7 @@ int main(void)
         return 1;
     }
     test_init_writes_only_the_callers_bytes();
+    test_resample_default(ctx);
     test_older_layouts_render(ctx, vol);
     test_unknown_sizes_refused(ctx, vol);
     test_load_options(ctx);

@@ -16,7 +16,10 @@
  *  - seen small, the levels of detail are made from the copy (cubic) and
  *    draw the ball as the stored grid's levels do;
  *  - bit-identical for 1 and 2 threads; the copy is kept across frames and
- *    across a new range, and made anew for new voxels. */
+ *    across a new range, and made anew for new voxels and for a range that
+ *    moves the value outside the volume;
+ *  - with the outside value visible (CT air) and the thick axis oriented
+ *    into the world's -x, the volume ends where the stored grid ends. */
 #include "context.h"
 #include "lod.h"
 #include "resample.h"
@@ -258,6 +261,90 @@ static void test_picture(vs_context *ctx)
     vs_volume_release(v);
 }
 
+/* The alpha channel's box (first and last row and column above 0.01). */
+static void alpha_box(const vs_image *im, int box[4])
+{
+    box[0] = box[2] = 1 << 30;
+    box[1] = box[3] = -1;
+    for (int j = 0; j < im->height; j++)
+        for (int i = 0; i < im->width; i++)
+            if (im->rgba[4 * ((size_t)j * im->width + i) + 3] > 0.01f) {
+                if (i < box[0]) box[0] = i;
+                if (i > box[1]) box[1] = i;
+                if (j < box[2]) box[2] = j;
+                if (j > box[3]) box[3] = j;
+            }
+}
+
+/* A CT-like volume (air -1000, a ball of 300) with its thick axis turned
+ * into the world's -x (an oriented, permuted grid): where the volume ends
+ * is where the visible air ends, with and without the copy; a new range
+ * that moves the value outside the volume makes a new copy (the same
+ * image as a fresh context's). */
+static void test_faces(vs_context *ctx)
+{
+    const int d[3] = {30, 36, 16};
+    const double sp[3] = {1, 1, 2.25};
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, VS_I16, d, sp, &v) == VS_OK, "create");
+    if (!v) return;
+    short *f = vs_volume_data(v);
+    for (int k = 0; k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++) {
+                const double x = i - 14.5, y = j - 17.5, z = 2.25 * (k - 7.5);
+                f[((size_t)k * d[1] + j) * d[0] + i] = (short)(x * x + y * y + z * z < 100 ? 300 : -1000);
+            }
+    vs_volume_update_range(v);
+    /* index z (thick) -> world -x, index x -> world y, index y -> world z */
+    const double m[12] = {0, 0, -2.25, 40, 1, 0, 0, -5, 0, 1, 0, 3};
+    CHECK(vs_volume_set_transform(ctx, v, m) == VS_OK, "transform: %s", vs_last_error(ctx));
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 96;
+    s.azimuth = 0; /* the thick axis across the image, its two ends visible */
+    s.elevation = 20;
+    s.has_iso = 1;
+    s.iso_lo = -1200;
+    s.iso_hi = -500;
+    s.ramp = 50;
+    s.iso_opacity = 0.05f;
+    s.lod_pixels = 0;
+    s.threads = 2;
+    vs_stats so, sn;
+    s.resample = 0;
+    vs_image off = tu_render(ctx, v, &s, &so);
+    s.resample = -1;
+    vs_image on = tu_render(ctx, v, &s, &sn);
+    int bo[4], bn[4];
+    alpha_box(&off, bo);
+    alpha_box(&on, bn);
+    printf("  visible air, oriented thick axis: box %d..%d x %d..%d stored, %d..%d x %d..%d copy\n", bo[0], bo[1],
+           bo[2], bo[3], bn[0], bn[1], bn[2], bn[3]);
+    CHECK(sn.resampled == 1 && so.resampled == 0, "resampled %d / %d", sn.resampled, so.resampled);
+    for (int e = 0; e < 4; e++) CHECK(abs(bo[e] - bn[e]) <= 1, "box edge %d: stored %d, copy %d", e, bo[e], bn[e]);
+    vs_image_free(&off);
+    vs_image_free(&on);
+
+    /* a range whose minimum (the outside value) moves: the copy follows */
+    CHECK(vs_volume_set_range(v, -2000, 400) == VS_OK, "range");
+    s.iso_lo = -1500;
+    s.iso_hi = -900;
+    vs_image cached = tu_render(ctx, v, &s, NULL);
+    vs_context *fresh = NULL;
+    CHECK(vs_context_create(&fresh) == VS_OK, "context");
+    if (fresh) {
+        vs_image anew = tu_render(fresh, v, &s, NULL);
+        CHECK(cached.rgba && anew.rgba && tu_max_diff(&cached, &anew) == 0.0,
+              "after a new range: the kept copy draws another image than a new one (%g)",
+              cached.rgba && anew.rgba ? tu_max_diff(&cached, &anew) : -1.0);
+        vs_image_free(&anew);
+        vs_context_release(fresh);
+    }
+    vs_image_free(&cached);
+    vs_volume_release(v);
+}
+
 int main(void)
 {
     vs_context *ctx = NULL;
@@ -265,6 +352,7 @@ int main(void)
     test_copy(ctx);
     test_who(ctx);
     test_picture(ctx);
+    test_faces(ctx);
     vs_context_release(ctx);
     TEST_DONE();
 }
