@@ -126,6 +126,25 @@ static int grid_frame(const struct vs_volume *vol, double Q[3][3], int perm[3], 
     return err < 1e-6 ? 2 : 0;
 }
 
+/* What --zoom scales: the volume's largest extent. */
+static double largest_extent(const struct vs_volume *vol)
+{
+    double e = 0.0;
+    for (int a = 0; a < 3; a++)
+        if (vol->dims[a] * vol->spacing[a] > e) e = vol->dims[a] * vol->spacing[a];
+    return e;
+}
+
+void vs_camera_settings_for_copy(const struct vs_volume *vol, const struct vs_volume *copy, const vs_settings *s,
+                                 vs_settings *out)
+{
+    *out = *s;
+    out->zoom = s->zoom * largest_extent(copy) / largest_extent(vol);
+    out->has_center = 1;
+    for (int a = 0; a < 3; a++)
+        out->center[a] = vs_volume_index_in(vol, copy, a, s->has_center ? s->center[a] : 0.5 * (vol->dims[a] - 1));
+}
+
 int vs_camera_grid_orthonormal(const struct vs_volume *vol)
 {
     double Q[3][3], sign[3];
@@ -187,12 +206,10 @@ vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
             rows[r][a] = kind == 1 ? (sign[a] > 0 ? W[r][perm[a]] : -W[r][perm[a]])
                                    : W[r][0] * Q[0][a] + W[r][1] * Q[1][a] + W[r][2] * Q[2][a];
 
-    double extent = 0.0, unit = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        double e = vol->dims[a] * vol->spacing[a];
-        if (e > extent) extent = e;
+    const double extent = largest_extent(vol);
+    double unit = INFINITY;
+    for (int a = 0; a < 3; a++)
         if (vol->spacing[a] < unit) unit = vol->spacing[a];
-    }
     cam->unit_mm = unit;
     cam->px_per_mm = s->zoom * s->width / extent;
     cam->z_per_mm = 1.0 / unit;

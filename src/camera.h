@@ -99,4 +99,11 @@ static inline double vs_camera_ray_length(const vs_camera *cam, double x, double
  * permutation of the world's, whatever their spacing), 0 when sheared. */
 int vs_camera_grid_orthonormal(const struct vs_volume *vol);
 
+/* The settings that frame `copy` (a level of detail of vol, or its copy on
+ * cubic voxels: the same axis directions, placed in the same world) as s
+ * frames vol: the zoom that keeps the pixels per millimetre (the camera
+ * scales by the largest extent) and the centre as the copy's index. */
+void vs_camera_settings_for_copy(const struct vs_volume *vol, const struct vs_volume *copy, const vs_settings *s,
+                                 vs_settings *out);
+
 #endif

@@ -108,31 +108,14 @@ static const float taps[4] = {0.125f, 0.375f, 0.375f, 0.125f};
 
 static inline int clampi(int v, int hi) { return v < 0 ? 0 : v > hi ? hi : v; }
 
-/* row = sum of w[t] * row jj of input plane p[t], as float */
-#define ZSUM(T, CONV)                                                                                              \
-    do {                                                                                                           \
-        const T *q[4];                                                                                             \
-        for (int t = 0; t < n; t++) q[t] = (const T *)J->in->data + (size_t)p[t] * np + (size_t)jj * d[0];         \
-        if (n == 4)                                                                                                \
-            for (int i = 0; i < d[0]; i++)                                                                         \
-                row[i] = w[0] * CONV(q[0][i]) + w[1] * CONV(q[1][i]) + w[2] * CONV(q[2][i]) + w[3] * CONV(q[3][i]); \
-        else                                                                                                       \
-            for (int i = 0; i < d[0]; i++) row[i] = CONV(q[0][i]);                                                 \
-    } while (0)
-#define AS_FLOAT(x) ((float)(x))
-#define AS_FINITE(x) (isfinite(x) ? (x) : J->base)
-
-/* Input row jj of output plane k's z taps, filtered in z into `row`. */
+/* Input row jj of output plane k's z taps, filtered in z into `row`: the
+ * taps' sum in order, as float (one tap: the row itself). */
 static void z_row(const down_job *J, const int p[4], const float w[4], int n, int jj, float *row)
 {
     const int *d = J->in->dims;
     const size_t np = (size_t)d[0] * d[1];
-    switch (J->in->type) {
-    case VS_U8: ZSUM(uint8_t, AS_FLOAT); break;
-    case VS_I16: ZSUM(int16_t, AS_FLOAT); break;
-    case VS_U16: ZSUM(uint16_t, AS_FLOAT); break;
-    default: ZSUM(float, AS_FINITE); break;
-    }
+    for (int t = 0; t < n; t++)
+        vs_volume_axpy_floats(J->in, (size_t)p[t] * np + (size_t)jj * d[0], (size_t)d[0], w[t], J->base, t == 0, row);
 }
 
 static void down_plane(void *arg, int worker, int k)
@@ -222,11 +205,7 @@ static vs_status build_level(vs_context *ctx, struct vs_pool *pool, const struct
     vs_status st = vs_volume_alloc(ctx, in->type, dims, sp, &v);
     if (st != VS_OK) return st;
     place_level(v, in);
-    /* the full volume's range and defaults: the classification is the same */
-    v->vmin = full->vmin;
-    v->vmax = full->vmax;
-    v->default_iso = full->default_iso;
-    v->default_ramp = full->default_ramp;
+    vs_volume_share_classification(v, full);
     J.out = v;
     const int nw = pool ? vs_pool_threads(pool) : 1;
     J.per_worker = 6 * (size_t)in->dims[0];
@@ -294,15 +273,9 @@ vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache
 void vs_lod_settings(const struct vs_volume *vol, const struct vs_volume *lv, const vs_settings *s,
                      vs_settings *out)
 {
-    *out = *s;
-    /* the camera scales the image by the volume's largest extent: keep the
-     * pixels per millimetre of the full volume's */
-    double e = 0.0, el = 0.0;
-    for (int a = 0; a < 3; a++) {
-        if (vol->dims[a] * vol->spacing[a] > e) e = vol->dims[a] * vol->spacing[a];
-        if (lv->dims[a] * lv->spacing[a] > el) el = lv->dims[a] * lv->spacing[a];
-    }
-    out->zoom = s->zoom * el / e;
+    /* the pixels per millimetre and the world point at the centre of the
+     * full volume's frame */
+    vs_camera_settings_for_copy(vol, lv, s, out);
     /* Sheets: a level halved along every axis keeps --slab in its own
      * units, so it halves the sheets too.  One that kept an axis (thick
      * CT/EM slices) keeps the slab's thickness in the volume's units: in
@@ -320,13 +293,5 @@ void vs_lod_settings(const struct vs_volume *vol, const struct vs_volume *lv, co
         }
         const double slab = s->slab * uf / ul;
         out->slab = slab < 0.01 ? 0.01 : slab > 64.0 ? 64.0 : slab;
-    }
-    /* full index c is level index (c - (f - 1) / 2) / f, f the axis's
-     * decimation (a power of two, exact in the spacing ratio) */
-    out->has_center = 1;
-    for (int a = 0; a < 3; a++) {
-        const double f = lv->spacing[a] / vol->spacing[a];
-        const double c = s->has_center ? s->center[a] : 0.5 * (vol->dims[a] - 1);
-        out->center[a] = (c - 0.5 * (f - 1.0)) / f;
     }
 }

@@ -383,14 +383,9 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
         /* the full volume's faces (index -0.5 and dims - 0.5) in the
-         * splatted volume's index: a level or the cubic copy has the same
-         * axis directions, scaled and shifted (lod.c place_level,
-         * resample.c place_cubic) */
-        double shift = 0.0;
-        for (int r = 0; r < 3; r++)
-            shift += full->affine[r][a] / full->spacing[a] * (full->affine[r][3] - vol->affine[r][3]);
-        const double lo_face = (-0.5 * full->spacing[a] + shift) / vol->spacing[a];
-        const double hi_face = ((full->dims[a] - 0.5) * full->spacing[a] + shift) / vol->spacing[a];
+         * splatted volume's index (a level or the cubic copy) */
+        const double lo_face = vs_volume_index_in(full, vol, a, -0.5);
+        const double hi_face = vs_volume_index_in(full, vol, a, full->dims[a] - 0.5);
         F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : zero_vis ? lo_face : -INFINITY;
         F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : zero_vis ? hi_face : INFINITY;
         F.clip_hi_open[a] = cut_hi;

@@ -139,26 +139,6 @@ typedef struct resample_job {
     float base; /* what a non-finite voxel reads as: the value outside the volume */
 } resample_job;
 
-/* acc[i] += w * plane p's voxel i, as float (non-finite: base) */
-#define ZACC(T, CONV)                                                                                              \
-    do {                                                                                                           \
-        const T *q = (const T *)J->in->data + (size_t)p * np;                                                      \
-        for (size_t i = 0; i < np; i++) acc[i] += w * CONV(q[i]);                                                  \
-    } while (0)
-#define AS_FLOAT(x) ((float)(x))
-#define AS_FINITE(x) (isfinite(x) ? (x) : J->base)
-
-static void z_acc(const resample_job *J, int p, float w, float *acc)
-{
-    const size_t np = (size_t)J->in->dims[0] * J->in->dims[1];
-    switch (J->in->type) {
-    case VS_U8: ZACC(uint8_t, AS_FLOAT); break;
-    case VS_I16: ZACC(int16_t, AS_FLOAT); break;
-    case VS_U16: ZACC(uint16_t, AS_FLOAT); break;
-    default: ZACC(float, AS_FINITE); break;
-    }
-}
-
 /* Output plane k: z taps into a plane of input rows, y taps into a plane
  * of output rows, x taps a row at a time. */
 static void resample_plane(void *arg, int worker, int k)
@@ -174,7 +154,8 @@ static void resample_plane(void *arg, int worker, int k)
         const float w = fz->w[(size_t)k * fz->taps + t];
         const int p = fz->first[k] + t;
         if (p < 0 || p >= d[2]) out_w += w;
-        else if (w != 0.0f) z_acc(J, p, w, zp);
+        else if (w != 0.0f)
+            vs_volume_axpy_floats(J->in, (size_t)p * d[0] * d[1], (size_t)d[0] * d[1], w, J->base, 0, zp);
     }
     if (out_w != 0.0f)
         for (size_t i = 0; i < (size_t)d[0] * d[1]; i++) zp[i] += out_w * J->base;
@@ -245,11 +226,7 @@ static vs_status build_cubic(vs_context *ctx, struct vs_pool *pool, const struct
     vs_status st = vs_volume_alloc(ctx, vol->type, d, sp, &cv);
     if (st != VS_OK) return st;
     place_cubic(cv, vol);
-    /* the volume's range and defaults: the classification is the same */
-    cv->vmin = vol->vmin;
-    cv->vmax = vol->vmax;
-    cv->default_iso = vol->default_iso;
-    cv->default_ramp = vol->default_ramp;
+    vs_volume_share_classification(cv, vol);
     J.out = cv;
     int ok = 1;
     for (int a = 0; a < 3; a++) ok &= axis_setup(vol, a, fine, d[a], &J.f[a]);
@@ -326,20 +303,8 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
 void vs_resample_settings(const struct vs_volume *vol, const struct vs_volume *cv, const vs_settings *s,
                           vs_settings *out)
 {
-    *out = *s;
-    /* the camera scales the image by the largest extent: keep the pixels
-     * per millimetre (the sheets, one finest voxel apart, stay where they
-     * were: both grids have the same finest spacing) */
-    double e = 0.0, ec = 0.0;
-    for (int a = 0; a < 3; a++) {
-        if (vol->dims[a] * vol->spacing[a] > e) e = vol->dims[a] * vol->spacing[a];
-        if (cv->dims[a] * cv->spacing[a] > ec) ec = cv->dims[a] * cv->spacing[a];
-    }
-    out->zoom = s->zoom * ec / e;
-    /* the same world point at the image centre */
-    out->has_center = 1;
-    for (int a = 0; a < 3; a++) {
-        const double c = s->has_center ? s->center[a] : 0.5 * (vol->dims[a] - 1);
-        out->center[a] = 0.5 * (cv->dims[a] - 1) + (c - 0.5 * (vol->dims[a] - 1)) * vol->spacing[a] / cv->spacing[a];
-    }
+    /* the same pixels per millimetre and world point at the centre; the
+     * sheets, one finest voxel apart, stay where they were (both grids
+     * have the same finest spacing) */
+    vs_camera_settings_for_copy(vol, cv, s, out);
 }

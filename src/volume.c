@@ -341,3 +341,41 @@ void vs_volume_store_floats(struct vs_volume *v, size_t at, const float *x, int 
     default: memcpy((float *)v->data + at, x, (size_t)n * sizeof *x);
     }
 }
+
+double vs_volume_index_in(const struct vs_volume *from, const struct vs_volume *to, int a, double c)
+{
+    /* along the axis's unit direction u: to's index of the world point
+     * from's transform puts at c */
+    double shift = 0.0;
+    for (int r = 0; r < 3; r++) shift += from->affine[r][a] / from->spacing[a] * (from->affine[r][3] - to->affine[r][3]);
+    return (c * from->spacing[a] + shift) / to->spacing[a];
+}
+
+#define AXPY(T, CONV)                                                                                              \
+    do {                                                                                                           \
+        const T *x = (const T *)v->data + at;                                                                      \
+        if (first)                                                                                                 \
+            for (size_t i = 0; i < n; i++) out[i] = w * CONV(x[i]);                                                \
+        else                                                                                                       \
+            for (size_t i = 0; i < n; i++) out[i] += w * CONV(x[i]);                                               \
+    } while (0)
+#define AS_FLOAT(x) ((float)(x))
+#define AS_FINITE(x) (isfinite(x) ? (x) : base)
+
+void vs_volume_axpy_floats(const struct vs_volume *v, size_t at, size_t n, float w, float base, int first, float *out)
+{
+    switch (v->type) {
+    case VS_U8: AXPY(uint8_t, AS_FLOAT); break;
+    case VS_I16: AXPY(int16_t, AS_FLOAT); break;
+    case VS_U16: AXPY(uint16_t, AS_FLOAT); break;
+    default: AXPY(float, AS_FINITE); break;
+    }
+}
+
+void vs_volume_share_classification(struct vs_volume *copy, const struct vs_volume *v)
+{
+    copy->vmin = v->vmin;
+    copy->vmax = v->vmax;
+    copy->default_iso = v->default_iso;
+    copy->default_ramp = v->default_ramp;
+}

@@ -113,4 +113,18 @@ vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
  * saturated for the integer types (filtered copies: levels, resampling). */
 void vs_volume_store_floats(struct vs_volume *v, size_t at, const float *x, int n);
 
+/* Index coordinate c along axis a of `from` as an index along axis a of
+ * `to`, a copy of it placed with the same axis directions (a level of
+ * detail, the copy on cubic voxels): through both transforms. */
+double vs_volume_index_in(const struct vs_volume *from, const struct vs_volume *to, int a, double c);
+
+/* out[i] = w x[i] (first) or out[i] += w x[i] for the n voxels from linear
+ * index `at`, as float; a non-finite value reads as `base` (filtered
+ * copies: levels, resampling). */
+void vs_volume_axpy_floats(const struct vs_volume *v, size_t at, size_t n, float w, float base, int first, float *out);
+
+/* A filtered copy (a level, the copy on cubic voxels) takes its volume's
+ * range and default classification: the classification is the same. */
+void vs_volume_share_classification(struct vs_volume *copy, const struct vs_volume *v);
+
 #endif
