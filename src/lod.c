@@ -230,35 +230,27 @@ vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache
     *out = NULL;
     vs_lod_cache *c = *cache;
     /* the spacing decides which axes halve: a new one, new levels */
-    if (c && (c->vol != vol || c->data_serial != vol->data_serial ||
-              memcmp(c->spacing, vol->spacing, sizeof c->spacing))) {
+    if (c && !vs_volume_stamp_same_voxels(&c->from, vol)) {
         vs_lod_cache_free(c);
         c = *cache = NULL;
     }
     if (!c) {
         if (!(c = *cache = calloc(1, sizeof *c)))
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
-        c->vol = vol;
-        c->serial = vol->serial;
-        c->data_serial = vol->data_serial;
-        memcpy(c->spacing, vol->spacing, sizeof c->spacing);
-        memcpy(c->affine, vol->affine, sizeof c->affine);
-        c->has_orientation = vol->has_orientation;
-    } else if (c->serial != vol->serial) {
+        vs_volume_stamp_take(&c->from, vol);
+    } else if (c->from.serial != vol->serial) {
         /* vs_volume_set_range since: the same voxels, classified anew */
         for (int l = 1; l <= VS_LOD_MAX && c->level[l]; l++) {
             c->level[l]->vmin = vol->vmin;
             c->level[l]->vmax = vol->vmax;
             vs_volume_new_serial(c->level[l]);
         }
-        c->serial = vol->serial;
     }
-    if (memcmp(c->affine, vol->affine, sizeof c->affine) || c->has_orientation != vol->has_orientation) {
+    if (!vs_volume_stamp_same_place(&c->from, vol)) {
         /* vs_volume_set_transform since: the same voxels, placed anew */
         for (int l = 1; l <= VS_LOD_MAX && c->level[l]; l++) place_level(c->level[l], l == 1 ? vol : c->level[l - 1]);
-        memcpy(c->affine, vol->affine, sizeof c->affine);
-        c->has_orientation = vol->has_orientation;
     }
+    vs_volume_stamp_take(&c->from, vol);
     for (int l = 1; l <= level; l++) {
         if (c->level[l]) continue;
         const double t0 = vs_now_ms();

@@ -17,10 +17,7 @@
 #define VS_LOD_MIN_DIM 8
 
 typedef struct vs_lod_cache {
-    const struct vs_volume *vol; /* key: the full-resolution volume */
-    uint64_t serial, data_serial; /* the volume's when the levels were built or last ranged */
-    double spacing[3], affine[3][4]; /* its geometry when the levels were built */
-    int has_orientation;
+    vs_volume_stamp from; /* the full-resolution volume, when built, ranged, placed */
     struct vs_volume *level[VS_LOD_MAX + 1]; /* [0] unused: the volume itself */
     /* each level's relevant voxels (full resolution's are the context's):
      * a view that moves between levels does not rebuild them */

@@ -584,7 +584,7 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
 {
     int level = 0, resampled = 0;
     double ms_lod = 0.0, ms_resample = 0.0, span[2] = {0.0, 0.0};
-    const vs_volume *base = vol, *lv = vol;
+    const vs_volume *base = vol;
     struct vs_relevant_cache **rel = &ctx->relevant;
     vs_settings rs, ls;
     /* an anisotropic grid: its copy on cubic voxels (resample.h) is what
@@ -595,15 +595,15 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         if (rc != VS_OK) return rc;
         span[0] = vs_now_ms();
         if (vs_resample_get(ctx, ctx->pool, &ctx->resample, vol, &base, &ms_resample) == VS_OK) {
-            vs_resample_settings(vol, base, s, &rs);
+            vs_camera_settings_for_copy(vol, base, s, &rs);
             s = &rs;
             rel = &ctx->resample->relevant;
             resampled = 1;
         } else {
             base = vol;
         }
-        lv = base;
     }
+    const vs_volume *lv = base; /* what is splatted: base or a level of it */
     if (s->lod_pixels > 0.0 && !s->has_crop) {
         vs_camera cam;
         vs_status rc = vs_camera_setup(ctx, base, s, &cam);

@@ -1,5 +1,5 @@
-/* Anisotropic grids on cubic voxels (resample.h): the copy, its cache, and
- * the settings that frame it as the volume. */
+/* Anisotropic grids on cubic voxels (resample.h): the copy, whom it
+ * serves, and its cache. */
 #include "resample.h"
 #include "camera.h"
 #include "context.h"
@@ -74,7 +74,6 @@ int vs_resample_wanted(const struct vs_volume *vol, const vs_settings *s)
     if (!cubic_dims(vol, fine, d)) return 0;
     double n = 1.0, n0 = 1.0;
     for (int a = 0; a < 3; a++) n *= d[a], n0 *= vol->dims[a];
-    if (n > 4e18) return 0;
     const double bytes = n * (double)vs_type_size(vol->type), bytes0 = n0 * (double)vs_type_size(vol->type);
     /* auto: a copy of at most the volume's size plus 64 MB (it is kept
      * beside the caller's volume) */
@@ -85,7 +84,7 @@ int vs_resample_wanted(const struct vs_volume *vol, const vs_settings *s)
  * taps - 1 with weights w[j taps ..] (outside the volume: its base value,
  * as splatting reconstructs there); a kept axis has one tap of weight 1. */
 typedef struct axis_filter {
-    int n, taps;
+    int taps;
     int *first;
     float *w;
 } axis_filter;
@@ -96,7 +95,6 @@ static int axis_setup(const struct vs_volume *vol, int a, double fine, int n, ax
     const double ratio = vol->spacing[a] / fine;
     const double sig = between_sigma(vol, a, fine); /* under 0.61: at most 8 taps */
     const int reach = (int)ceil(4.0 * sig);
-    f->n = n;
     f->taps = sig > 0.0 ? 2 * reach + 2 : 1;
     f->first = malloc((size_t)n * sizeof *f->first);
     f->w = malloc((size_t)n * f->taps * sizeof *f->w);
@@ -262,12 +260,10 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
     *ms = 0.0;
     *out = NULL;
     vs_resample_cache *c = *cache;
-    /* new voxels, a new geometry (the copy's size follows the spacing) or a
-     * new value outside the volume (its padding and NaN hold it: a new
-     * range can move it): a new copy */
-    if (c && (c->vol != vol || c->data_serial != vol->data_serial || memcmp(c->spacing, vol->spacing, sizeof c->spacing) ||
-              memcmp(c->affine, vol->affine, sizeof c->affine) || c->has_orientation != vol->has_orientation ||
-              c->base != vs_volume_base(vol))) {
+    /* new voxels, a new spacing (the copy's size follows it) or a new
+     * value outside the volume (its padding and NaN hold it: a new range
+     * can move it): a new copy */
+    if (c && (!vs_volume_stamp_same_voxels(&c->from, vol) || c->base != vs_volume_base(vol))) {
         vs_resample_cache_free(c);
         c = *cache = NULL;
     }
@@ -280,31 +276,20 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
             free(c);
             return st;
         }
-        c->vol = vol;
-        c->serial = vol->serial;
-        c->data_serial = vol->data_serial;
-        memcpy(c->spacing, vol->spacing, sizeof c->spacing);
-        memcpy(c->affine, vol->affine, sizeof c->affine);
-        c->has_orientation = vol->has_orientation;
         c->base = vs_volume_base(vol);
         *cache = c;
         *ms = vs_now_ms() - t0;
-    } else if (c->serial != vol->serial) {
-        /* vs_volume_set_range since: the same voxels, classified anew */
-        c->cubic->vmin = vol->vmin;
-        c->cubic->vmax = vol->vmax;
-        vs_volume_new_serial(c->cubic);
-        c->serial = vol->serial;
+    } else {
+        if (c->from.serial != vol->serial) {
+            /* vs_volume_set_range since: the same voxels, classified anew */
+            c->cubic->vmin = vol->vmin;
+            c->cubic->vmax = vol->vmax;
+            vs_volume_new_serial(c->cubic);
+        }
+        /* vs_volume_set_transform since: the same voxels, placed anew */
+        if (!vs_volume_stamp_same_place(&c->from, vol)) place_cubic(c->cubic, vol);
     }
+    vs_volume_stamp_take(&c->from, vol);
     *out = c->cubic;
     return VS_OK;
-}
-
-void vs_resample_settings(const struct vs_volume *vol, const struct vs_volume *cv, const vs_settings *s,
-                          vs_settings *out)
-{
-    /* the same pixels per millimetre and world point at the centre; the
-     * sheets, one finest voxel apart, stay where they were (both grids
-     * have the same finest spacing) */
-    vs_camera_settings_for_copy(vol, cv, s, out);
 }

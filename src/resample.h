@@ -8,7 +8,9 @@
  * Gaussian of width sigma s_a along a thick axis is the cubic grid's
  * Gaussian (sigma s_min) convolved with one of width sigma sqrt(s_a^2 -
  * s_min^2), so each new voxel is that narrower Gaussian of the old ones
- * along the axis, normalised (resample.c). */
+ * along the axis, normalised (resample.c).  It is framed as the volume by
+ * vs_camera_settings_for_copy: same centre, same finest spacing, so the
+ * sheets stay where they were. */
 #ifndef VS_RESAMPLE_H
 #define VS_RESAMPLE_H
 
@@ -16,10 +18,7 @@
 
 struct vs_relevant_cache;
 typedef struct vs_resample_cache {
-    const struct vs_volume *vol;     /* key: the volume resampled */
-    uint64_t serial, data_serial;    /* its serials when the copy was made or ranged */
-    double spacing[3], affine[3][4]; /* its geometry when the copy was made */
-    int has_orientation;
+    vs_volume_stamp from;            /* the volume, when copied, ranged, placed */
     double base;                     /* its value outside the volume, which the copy holds */
     struct vs_volume *cubic;         /* the copy on cubic voxels */
     struct vs_relevant_cache *relevant; /* the copy's relevant voxels */
@@ -40,9 +39,6 @@ int vs_resample_wanted(const struct vs_volume *vol, const vs_settings *s);
 struct vs_pool;
 vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cache **cache,
                           const struct vs_volume *vol, const struct vs_volume **out, double *ms);
-/* The settings that frame the copy cv exactly as s frames vol. */
-void vs_resample_settings(const struct vs_volume *vol, const struct vs_volume *cv, const vs_settings *s,
-                          vs_settings *out);
 void vs_resample_cache_free(vs_resample_cache *c);
 
 #endif

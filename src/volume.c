@@ -379,3 +379,23 @@ void vs_volume_share_classification(struct vs_volume *copy, const struct vs_volu
     copy->default_iso = v->default_iso;
     copy->default_ramp = v->default_ramp;
 }
+
+void vs_volume_stamp_take(vs_volume_stamp *st, const struct vs_volume *v)
+{
+    st->vol = v;
+    st->serial = v->serial;
+    st->data_serial = v->data_serial;
+    memcpy(st->spacing, v->spacing, sizeof st->spacing);
+    memcpy(st->affine, v->affine, sizeof st->affine);
+    st->has_orientation = v->has_orientation;
+}
+
+int vs_volume_stamp_same_voxels(const vs_volume_stamp *st, const struct vs_volume *v)
+{
+    return st->vol == v && st->data_serial == v->data_serial && !memcmp(st->spacing, v->spacing, sizeof st->spacing);
+}
+
+int vs_volume_stamp_same_place(const vs_volume_stamp *st, const struct vs_volume *v)
+{
+    return !memcmp(st->affine, v->affine, sizeof st->affine) && st->has_orientation == v->has_orientation;
+}

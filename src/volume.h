@@ -127,4 +127,20 @@ void vs_volume_axpy_floats(const struct vs_volume *v, size_t at, size_t n, float
  * range and default classification: the classification is the same. */
 void vs_volume_share_classification(struct vs_volume *copy, const struct vs_volume *v);
 
+/* What a filtered copy of a volume (its levels, its copy on cubic voxels)
+ * was made from, so that its cache knows what changed since: new voxels
+ * or spacing (made anew), a new range (the same voxels, classified anew),
+ * a new transform (the same voxels, placed anew). */
+typedef struct vs_volume_stamp {
+    const struct vs_volume *vol;
+    uint64_t serial, data_serial;
+    double spacing[3], affine[3][4];
+    int has_orientation;
+} vs_volume_stamp;
+void vs_volume_stamp_take(vs_volume_stamp *st, const struct vs_volume *v);
+/* The same volume, voxels and spacing. */
+int vs_volume_stamp_same_voxels(const vs_volume_stamp *st, const struct vs_volume *v);
+/* The same transform and orientation. */
+int vs_volume_stamp_same_place(const vs_volume_stamp *st, const struct vs_volume *v);
+
 #endif

@@ -19,7 +19,8 @@
  *    across a new range, and made anew for new voxels and for a range that
  *    moves the value outside the volume;
  *  - with the outside value visible (CT air) and the thick axis oriented
- *    into the world's -x, the volume ends where the stored grid ends. */
+ *    into the world's -x, the volume ends where the stored grid ends; a
+ *    new transform places the kept copy anew, as a fresh one draws. */
 #include "context.h"
 #include "lod.h"
 #include "resample.h"
@@ -108,7 +109,7 @@ static void test_copy(vs_context *ctx)
         CHECK(again == cv && ms == 0.0, "not kept (%g ms)", ms);
         vs_volume_update_range(v);
         vs_resample_get(ctx, NULL, &c, v, &again, &ms);
-        CHECK(c && c->data_serial == v->data_serial, "not made anew for new voxels");
+        CHECK(c && c->from.data_serial == v->data_serial, "not made anew for new voxels");
     }
     vs_resample_cache_free(c);
     vs_volume_release(v);
@@ -276,6 +277,26 @@ static void alpha_box(const vs_image *im, int box[4])
             }
 }
 
+/* The frame a context that kept the copy draws equals a fresh context's
+ * after `what` changed the volume; returns the kept frame's ms_resample. */
+static double same_as_fresh(vs_context *ctx, const vs_volume *v, const vs_settings *s, const char *what)
+{
+    vs_stats st;
+    st.ms_resample = -1.0;
+    vs_image kept = tu_render(ctx, v, s, &st);
+    vs_context *fresh = NULL;
+    CHECK(vs_context_create(&fresh) == VS_OK, "context");
+    if (fresh) {
+        vs_image anew = tu_render(fresh, v, s, NULL);
+        const double diff = kept.rgba && anew.rgba ? tu_max_diff(&kept, &anew) : -1.0;
+        CHECK(diff == 0.0, "after %s: the kept copy draws another image than a new one (%g)", what, diff);
+        vs_image_free(&anew);
+        vs_context_release(fresh);
+    }
+    vs_image_free(&kept);
+    return st.ms_resample;
+}
+
 /* A CT-like volume (air -1000, a ball of 300) with its thick axis turned
  * into the world's -x (an oriented, permuted grid): where the volume ends
  * is where the visible air ends, with and without the copy; a new range
@@ -330,18 +351,12 @@ static void test_faces(vs_context *ctx)
     CHECK(vs_volume_set_range(v, -2000, 400) == VS_OK, "range");
     s.iso_lo = -1500;
     s.iso_hi = -900;
-    vs_image cached = tu_render(ctx, v, &s, NULL);
-    vs_context *fresh = NULL;
-    CHECK(vs_context_create(&fresh) == VS_OK, "context");
-    if (fresh) {
-        vs_image anew = tu_render(fresh, v, &s, NULL);
-        CHECK(cached.rgba && anew.rgba && tu_max_diff(&cached, &anew) == 0.0,
-              "after a new range: the kept copy draws another image than a new one (%g)",
-              cached.rgba && anew.rgba ? tu_max_diff(&cached, &anew) : -1.0);
-        vs_image_free(&anew);
-        vs_context_release(fresh);
-    }
-    vs_image_free(&cached);
+    same_as_fresh(ctx, v, &s, "a new range");
+    /* a new transform: the same copy, placed anew (not made again) */
+    const double m2[12] = {0, 0, 2.25, -30, 0, 1, 0, 4, 1, 0, 0, -2};
+    CHECK(vs_volume_set_transform(ctx, v, m2) == VS_OK, "transform: %s", vs_last_error(ctx));
+    const double ms = same_as_fresh(ctx, v, &s, "a new transform");
+    CHECK(ms == 0.0, "a new transform made the copy again (%g ms)", ms);
     vs_volume_release(v);
 }
 
