@@ -56,6 +56,16 @@ static inline void emit_halves(const float e[8], float d1, float s1, float d2, f
     for (int i = 0; i < 3; i++) c[i] = ((e[1 + i] * d1 + a1 * s1) + (1.0f - a1) * (e[5 + i] * d2 + a2 * s2)) * inv;
 }
 
+/* Each half lit by the terms at its ends mixed at its opacity's position
+ * w1, w2: the front half between sheet k's terms (d[0], s[0]) and the
+ * middle's (d[1], s[1]), the back half between the middle's and sheet
+ * k + 1's (d[2], s[2]). */
+static inline void emit_mixed(const float e[8], const float d[3], const float s[3], float w1, float w2, float c[3])
+{
+    emit_halves(e, d[0] + w1 * (d[1] - d[0]), s[0] + w1 * (s[1] - s[0]), d[1] + w2 * (d[2] - d[1]),
+                s[1] + w2 * (s[2] - s[1]), c);
+}
+
 static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
 {
     if (!B->n) return;
@@ -66,15 +76,10 @@ static void flush(const vs_frame *F, const sheet_view *sv, batch *B, float *out)
     for (int j = 0; j < B->n; j++) {
         /* each half's Phong terms mixed between those at its ends */
         const float *d = B->d + B->per * j, *sp = B->s + B->per * j;
-        float d1 = d[0], s1 = sp[0], d2 = d[0], s2 = sp[0];
-        if (B->per == 3) {
-            const float w1 = B->w[j][0], w2 = B->w[j][1];
-            d1 = d[0] + w1 * (d[1] - d[0]);
-            s1 = sp[0] + w1 * (sp[1] - sp[0]);
-            d2 = d[1] + w2 * (d[2] - d[1]);
-            s2 = sp[1] + w2 * (sp[2] - sp[1]);
-        }
-        emit_halves(B->e[j], d1, s1, d2, s2, out + 3 * B->o[j]);
+        if (B->per == 3)
+            emit_mixed(B->e[j], d, sp, B->w[j][0], B->w[j][1], out + 3 * B->o[j]);
+        else
+            emit_halves(B->e[j], d[0], sp[0], d[0], sp[0], out + 3 * B->o[j]);
     }
     B->n = 0;
 }
@@ -168,9 +173,7 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
             vs_preint_get4(P, &a2, e + 4);
             vs_post_alpha_terms(q, d0, s0, &dk, &sk);
             vs_post_alpha_terms(qn, d0, s0, &dn, &sn);
-            const float dm = 0.5f * (dk + dn), sm = 0.5f * (sk + sn);
-            const float w1 = vs_preint_position(P, &a1, e[0]), w2 = vs_preint_position(P, &a2, e[4]);
-            emit_halves(e, dk + w1 * (dm - dk), sk + w1 * (sm - sk), dm + w2 * (dn - dm), sm + w2 * (sn - sm),
-                        sb.g + 3 * o);
+            const float d[3] = {dk, 0.5f * (dk + dn), dn}, s[3] = {sk, 0.5f * (sk + sn), sn};
+            emit_mixed(e, d, s, vs_preint_position(P, &a1, e[0]), vs_preint_position(P, &a2, e[4]), sb.g + 3 * o);
         }
 }
