@@ -76,7 +76,7 @@ static void build_rows(void *arg, int worker, int task)
             const double vb = p->vmin + j / p->scale;
             double at[PIECES + 1][4];
             for (int m = 0; m <= PIECES; m++) prefix_at(P, vf + (vb - vf) * m / PIECES, at[m]);
-            double A = 0.0, C[3] = {0.0, 0.0, 0.0}, Z = 0.0;
+            double A = 0.0, C[3] = {0.0, 0.0, 0.0};
             const double dv = (vb - vf) / PIECES;
             for (int m = 0; m < PIECES && A < 1.0; m++) {
                 double tau, kc[3];
@@ -95,17 +95,15 @@ static void build_rows(void *arg, int worker, int task)
                 if (!(tau > 0.0)) continue;
                 const double a = -expm1(-tau * len), w = (1.0 - A) * a / tau;
                 for (int ch = 0; ch < 3; ch++) C[ch] += w * kc[ch];
-                Z += (1.0 - A) * a * (m + 0.5) / PIECES;
                 A += (1.0 - A) * a;
             }
             if (!(A >= 1e-30)) { /* as good as transparent: no colour whose inverse overflows */
-                A = Z = 0.0;
+                A = 0.0;
                 C[0] = C[1] = C[2] = 0.0;
             }
             float *e = p->tab + 4 * ((size_t)i * VS_PREINT_N + j);
             e[0] = (float)(A > 1.0 ? 1.0 : A);
             for (int ch = 0; ch < 3; ch++) e[1 + ch] = (float)C[ch];
-            p->pos[(size_t)i * VS_PREINT_N + j] = (float)Z;
         }
     }
 }
@@ -117,7 +115,6 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
         return 1;
     const double t0 = vs_now_ms();
     if (!p->tab && !(p->tab = aligned_alloc(64, sizeof(float) * 4 * VS_PREINT_N * VS_PREINT_N))) return 0;
-    if (!p->pos && !(p->pos = malloc(sizeof(float) * VS_PREINT_N * VS_PREINT_N))) return 0;
     prefix P = {malloc(sizeof(double) * VS_TF_TABLE), malloc(sizeof(double) * 3 * VS_TF_TABLE), c};
     if (!P.t || !P.k) {
         free(P.t);
@@ -195,6 +192,5 @@ void vs_preint_free(vs_preint *p)
 {
     if (!p) return;
     free(p->tab);
-    free(p->pos);
     free(p);
 }

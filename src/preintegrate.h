@@ -27,10 +27,6 @@ typedef struct vs_preint {
      * transparent entry does not darken); four floats an entry, one
      * 16-byte load each */
     float *tab;
-    /* [front][back]: where along the segment (0 front .. 1 back) its
-     * opacity lies, the mean weighted by what each part adds, times the
-     * opacity (premultiplied, as the colour) */
-    float *pos;
     /* what the table was built from (rebuilt only when it changes) */
     float key_alpha[VS_TF_TABLE];
     float key_color[VS_TF_TABLE][3];
@@ -111,19 +107,6 @@ static inline float vs_preint_mid_cd(float qp, float q, float qn)
 static inline float vs_preint_over(float front, float back)
 {
     return front + (1.0f - front) * back;
-}
-
-/* The opacity-weighted position along the segment at a, in [0, 1], for
- * the segment's opacity alpha: where the shading gradient is taken
- * between the two sheets. */
-static inline float vs_preint_position(const vs_preint *p, const vs_preint_at *a, float alpha)
-{
-    if (!(alpha > 0.0f)) return 0.0f;
-    const float *e = p->pos + a->idx, *e1 = e + VS_PREINT_N;
-    const float u = e[0] + a->fy * (e[1] - e[0]);
-    const float v = e1[0] + a->fy * (e1[1] - e1[0]);
-    const float t = (u + a->fx * (v - u)) / alpha;
-    return t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
 }
 
 /* A span's opacities, sheet k to sheet k + 1 in two halves, by the
