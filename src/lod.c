@@ -1,6 +1,7 @@
 /* Levels of detail (lod.h): building the pyramid and choosing a level. */
 #include "lod.h"
 #include "context.h"
+#include "lod_keep.h"
 #include "pool.h"
 #include "relevant.h"
 #include "timing.h"
@@ -12,6 +13,8 @@
 void vs_lod_cache_free(vs_lod_cache *c)
 {
     if (!c) return;
+    vs_lod_keep_clear(c);
+    free(c->base_minmax);
     for (int l = 1; l <= VS_LOD_MAX; l++) {
         vs_volume_release(c->level[l]);
         vs_relevant_cache_free(c->relevant[l]);

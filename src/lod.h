@@ -22,6 +22,16 @@ typedef struct vs_lod_cache {
     /* each level's relevant voxels (full resolution's are the context's):
      * a view that moves between levels does not rebuild them */
     struct vs_relevant_cache *relevant[VS_LOD_MAX + 1];
+    /* lod_keep.c: per level, the copy patched for the classification
+     * below (NULL: the plain level shows it), whether it was worked out,
+     * and the level's serial then; the classification's opacity table and
+     * domain; the min-max per brick of the volume (level 1's source) */
+    struct vs_volume *kept[VS_LOD_MAX + 1];
+    int kept_done[VS_LOD_MAX + 1];
+    uint64_t kept_serial[VS_LOD_MAX + 1];
+    float *kept_alpha;
+    double kept_vmin, kept_scale;
+    float *base_minmax;
 } vs_lod_cache;
 
 struct vs_pool;

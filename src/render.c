@@ -7,6 +7,7 @@
 #include "timing.h"
 #include "finish.h"
 #include "lod.h"
+#include "lod_keep.h"
 #include "resample.h"
 #include "pool.h"
 #include "preintegrate.h"
@@ -618,6 +619,20 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
                 level = 0;
                 lv = base;
             }
+        }
+        if (level > 0) {
+            /* the level as the classification needs it: what thin
+             * structures it lost raised back (lod_keep.h) */
+            vs_classify *cls = malloc(sizeof *cls);
+            if (!cls) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory");
+            double ms_keep = 0.0;
+            rc = vs_classify_setup(ctx, vol, s, cls);
+            /* out of memory patching: the plain level rather than no frame */
+            if (rc == VS_OK && vs_lod_keep(ctx, ctx->pool, ctx->lod, base, level, cls, &lv, &ms_keep) != VS_OK)
+                lv = ctx->lod->level[level];
+            free(cls);
+            if (rc != VS_OK) return rc;
+            ms_lod += ms_keep;
         }
         if (level > 0) {
             vs_lod_settings(base, lv, s, &ls);
