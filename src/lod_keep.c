@@ -36,10 +36,9 @@
 #include <string.h>
 
 #define KEEP_JACOBI 3
-/* a brick and a ring of one coarse voxel are worked out (the ring so that
- * the brick's edge sees its neighbours raised too): the fine block covers
- * their taps and the kernel around those, the coarse one a ring of 3 */
-#define FB (2 * VS_BRICK + 8)
+/* block edges: the fine taps of a brick and the kernel around them; the
+ * level's brick and a ring of 3 */
+#define FB (2 * VS_BRICK + 4)
 #define CB (VS_BRICK + 6)
 
 void vs_lod_keep_clear(vs_lod_cache *c)
@@ -54,6 +53,13 @@ void vs_lod_keep_clear(vs_lod_cache *c)
     c->kept_alpha = NULL;
 }
 
+/* A lost voxel: its place in its brick (as vs_voxel), the reconstruction
+ * it must reach, and the greatest fine value under it. */
+typedef struct lost_voxel {
+    uint16_t at;
+    float t, top;
+} lost_voxel;
+
 typedef struct keep_job {
     const struct vs_volume *fine, *coarse;
     struct vs_volume *out;
@@ -65,9 +71,13 @@ typedef struct keep_job {
     float eps;            /* least opacity worth keeping */
     const uint16_t *first; /* lift's table */
     float peak;           /* the table's greatest opacity */
+    int iso;              /* an iso-range and ramp: opacity in closed form */
+    float a0, a1, inv2r;  /* its ramp's feet (lo - ramp, hi + ramp), 1 / (2 ramp) */
     float *scratch;       /* per worker */
     size_t per_worker;
     size_t *patched;      /* per slab of bricks */
+    struct lost_voxel **lost; /* per brick of the level: its lost voxels */
+    uint16_t *nlost;
 } keep_job;
 
 static inline int clampi(int v, int hi) { return v < 0 ? 0 : v > hi ? hi : v; }
@@ -126,6 +136,37 @@ static void kernel3(float *b, float *tmp, const int n[3])
         for (size_t x = 0; x < sz; x++) out[x] = (l[x] + 4.0f * m[x] + h[x]) * q;
     }
     memcpy(b, tmp, sz * n[2] * sizeof *b);
+}
+
+/* The greatest of each voxel and its neighbours (3x3x3) of block b into
+ * out (tmp: a block of the same size); the faces repeat their voxel. */
+static void max3(const float *b, float *tmp, float *out, const int n[3])
+{
+    const size_t sy = (size_t)n[0], sz = (size_t)n[0] * n[1];
+    for (size_t r = 0; r < sz * n[2]; r += sy)
+        for (int x = 0; x < n[0]; x++) {
+            const float l = b[r + (x > 0 ? x - 1 : x)], m = b[r + x], h = b[r + (x < n[0] - 1 ? x + 1 : x)];
+            const float lm = l > m ? l : m;
+            tmp[r + x] = lm > h ? lm : h;
+        }
+    for (int z = 0; z < n[2]; z++)
+        for (int y = 0; y < n[1]; y++) {
+            const float *m = tmp + z * sz + y * sy, *l = y > 0 ? m - sy : m, *h = y < n[1] - 1 ? m + sy : m;
+            float *o = out + z * sz + y * sy;
+            for (int x = 0; x < n[0]; x++) {
+                const float lm = l[x] > m[x] ? l[x] : m[x];
+                o[x] = lm > h[x] ? lm : h[x];
+            }
+        }
+    memcpy(tmp, out, sz * n[2] * sizeof *out);
+    for (int z = 0; z < n[2]; z++) {
+        const float *m = tmp + z * sz, *l = z > 0 ? m - sz : m, *h = z < n[2] - 1 ? m + sz : m;
+        float *o = out + z * sz;
+        for (size_t x = 0; x < sz; x++) {
+            const float lm = l[x] > m[x] ? l[x] : m[x];
+            o[x] = lm > h[x] ? lm : h[x];
+        }
+    }
 }
 
 /* lift's table: for LIFT_Q + 1 steps q of the peak opacity and each entry
@@ -213,77 +254,86 @@ static void down_axis(const float *in, int n[3], int a, int halved, int len, flo
     n[a] = len;
 }
 
-static size_t keep_brick(const keep_job *J, float *s, int bi, int bj, int bk)
+/* The n values x replaced by their opacity: the iso-range's in closed
+ * form (what the table samples; this vectorises), else the table's. */
+static void classify_n(const keep_job *J, float *x, size_t n)
 {
     const vs_classify *c = J->c;
+    if (J->iso) {
+        const float a0 = J->a0, a1 = J->a1, k = J->inv2r, peak = J->peak;
+        /* min and max as |.| (branch-free: the loop vectorises); the
+         * values are finite (read_block) */
+        const int band = isfinite(a1);
+        for (size_t i = 0; i < n; i++) {
+            const float a = (x[i] - a0) * k, b = band ? (a1 - x[i]) * k : a;
+            float m = 0.5f * (a + b - fabsf(a - b));
+            m = 0.5f * (m + fabsf(m));
+            x[i] = 0.5f * (m + 1.0f - fabsf(m - 1.0f)) * peak;
+        }
+        return;
+    }
+    const float alo = (float)c->alpha_lo, ahi = (float)c->alpha_hi;
+    for (size_t i = 0; i < n; i++) x[i] = x[i] > alo && x[i] < ahi ? vs_classify_alpha(c, x[i]) : 0.0f;
+}
+
+/* Phase 1, brick (bi, bj, bk) of the level: its lost voxels, each with
+ * the reconstruction it must reach and the greatest fine value under it,
+ * into J->lost; their count. */
+static size_t find_lost(const keep_job *J, float *s, int bi, int bj, int bk)
+{
     const int *cd = J->coarse->dims;
     int o[3], n[3], fo[3], fn[3], co[3], cn[3], flo[3], fhi[3];
     const int bo[3] = {bi, bj, bk};
     for (int a = 0; a < 3; a++) {
         o[a] = bo[a] * VS_BRICK;
         n[a] = o[a] + VS_BRICK <= cd[a] ? VS_BRICK : cd[a] - o[a];
-        fo[a] = J->dec[a] ? 2 * o[a] - 4 : o[a] - 2;
-        fn[a] = J->dec[a] ? 2 * n[a] + 8 : n[a] + 4;
-        co[a] = o[a] - 3;
-        cn[a] = n[a] + 6;
+        fo[a] = J->dec[a] ? 2 * o[a] - 2 : o[a] - 1;
+        fn[a] = J->dec[a] ? 2 * n[a] + 4 : n[a] + 2;
+        co[a] = o[a] - 2;
+        cn[a] = n[a] + 4;
         flo[a] = fo[a];
         fhi[a] = fo[a] + fn[a] - 1;
     }
     if (!fine_can_show(J, flo, fhi)) return 0;
     const size_t fsz = (size_t)fn[0] * fn[1] * fn[2], csz = (size_t)cn[0] * cn[1] * cn[2];
     float *fv = s, *fa = fv + FB * FB * FB, *tmp = fa + FB * FB * FB, *cv = tmp + FB * FB * FB,
-          *cr = cv + CB * CB * CB, *ca = cr + CB * CB * CB, *tgt = ca + CB * CB * CB, *gain = tgt + CB * CB * CB,
-          *nv = gain + CB * CB * CB, *top = nv + CB * CB * CB;
+          *cr = cv + CB * CB * CB, *ca = cr + CB * CB * CB, *around = ca + CB * CB * CB;
 
-    /* the coarse reconstruction and its opacity first: most bricks are
-     * visible or empty throughout */
+    /* the coarse reconstruction and its opacity first, and the most opaque
+     * coarse voxel around each: where that passes half the peak none is
+     * lost, and most bricks have no others */
     read_block(J->coarse, co, cn, J->base, cv);
     memcpy(cr, cv, csz * sizeof *cr);
     kernel3(cr, tmp, cn);
-    const float alo = (float)c->alpha_lo, ahi = (float)c->alpha_hi;
-    for (size_t i = 0; i < csz; i++) ca[i] = cr[i] > alo && cr[i] < ahi ? vs_classify_alpha(c, cr[i]) : 0.0f;
-
-    /* the most opaque coarse voxel around each (in gain, for now): where
-     * it passes half the peak, none is lost; a brick without others stops */
+    memcpy(ca, cr, csz * sizeof *ca);
+    classify_n(J, ca, csz);
+    max3(ca, tmp, around, cn);
     size_t open = 0;
-    for (int z = -1; z <= n[2]; z++)
-        for (int y = -1; y <= n[1]; y++)
-            for (int x = -1; x <= n[0]; x++) {
-                float around = 0.0f;
-                for (int dz = 2; dz <= 4; dz++)
-                    for (int dy = 2; dy <= 4; dy++)
-                        for (int dx = 2; dx <= 4; dx++) {
-                            const float a = ca[((size_t)(z + dz) * cn[1] + y + dy) * cn[0] + x + dx];
-                            if (a > around) around = a;
-                        }
-                gain[((size_t)(z + 3) * cn[1] + y + 3) * cn[0] + x + 3] = around;
-                open += around < 0.5f * J->peak;
-            }
+    for (int z = 0; z < n[2]; z++)
+        for (int y = 0; y < n[1]; y++)
+            for (int x = 0; x < n[0]; x++)
+                open += around[((size_t)(z + 2) * cn[1] + y + 2) * cn[0] + x + 2] < 0.5f * J->peak;
     if (!open) return 0;
 
-    /* the fine grid's opacity, filtered down as the level is: A */
+    /* the fine grid's opacity, filtered down as the level is: A (in tmp) */
     read_block(J->fine, fo, fn, J->base, fv);
     memcpy(fa, fv, fsz * sizeof *fa);
     kernel3(fa, tmp, fn);
-    for (size_t i = 0; i < fsz; i++) fa[i] = fa[i] > alo && fa[i] < ahi ? vs_classify_alpha(c, fa[i]) : 0.0f;
-    /* A for the brick and its ring, axis by axis: fa -> tmp -> fa -> tmp */
+    classify_n(J, fa, fsz);
     int na[3] = {fn[0], fn[1], fn[2]};
-    float *const A = tmp;
-    for (int a = 0; a < 3; a++)
-        down_axis(a == 1 ? tmp : fa, na, a, J->dec[a], n[a] + 2, a == 1 ? fa : tmp);
+    for (int a = 0; a < 3; a++) down_axis(a == 1 ? tmp : fa, na, a, J->dec[a], n[a], a == 1 ? fa : tmp);
+    const float *A = tmp;
+    lost_voxel *list = NULL;
     size_t lost = 0;
-    for (size_t i = 0; i < csz; i++) tgt[i] = NAN;
-    for (int z = -1; z <= n[2]; z++)
-        for (int y = -1; y <= n[1]; y++)
-            for (int x = -1; x <= n[0]; x++) {
-                const size_t ci = ((size_t)(z + 3) * cn[1] + y + 3) * cn[0] + x + 3;
-                const float around = gain[ci];
-                const size_t ai = ((size_t)(z + 1) * (n[1] + 2) + y + 1) * (n[0] + 2) + x + 1;
-                const float a = A[ai];
-                if (!(a > J->eps) || !(around < 0.5f * a)) continue;
+    for (int z = 0; z < n[2]; z++)
+        for (int y = 0; y < n[1]; y++)
+            for (int x = 0; x < n[0]; x++) {
+                const size_t ci = ((size_t)(z + 2) * cn[1] + y + 2) * cn[0] + x + 2;
+                const float a = A[((size_t)z * n[1] + y) * n[0] + x];
+                if (!(a > J->eps) || !(around[ci] < 0.5f * a)) continue;
                 /* the greatest fine value under it: no higher */
-                const int p[3] = {J->dec[0] ? 2 * x + 3 : x + 2, J->dec[1] ? 2 * y + 3 : y + 2,
-                                  J->dec[2] ? 2 * z + 3 : z + 2};
+                const int p[3] = {J->dec[0] ? 2 * x + 1 : x + 1, J->dec[1] ? 2 * y + 1 : y + 1,
+                                  J->dec[2] ? 2 * z + 1 : z + 1};
                 float vmax = -INFINITY;
                 for (int tz = 0; tz < (J->dec[2] ? 4 : 1); tz++)
                     for (int ty = 0; ty < (J->dec[1] ? 4 : 1); ty++)
@@ -293,13 +343,57 @@ static size_t keep_brick(const keep_job *J, float *s, int bi, int bj, int bk)
                         }
                 const float t = lift(J, cr[ci], a);
                 if (!(t > cr[ci]) || !(vmax > cv[ci])) continue;
-                tgt[ci] = t;
-                top[ci] = vmax;
-                lost += x >= 0 && x < n[0] && y >= 0 && y < n[1] && z >= 0 && z < n[2];
+                if (!list && !(list = malloc((size_t)VS_BRICK * VS_BRICK * VS_BRICK * sizeof *list))) return 0;
+                list[lost].at = (uint16_t)(x | y << VS_BRICK_BITS | z << (2 * VS_BRICK_BITS));
+                list[lost].t = t;
+                list[lost].top = vmax;
+                lost++;
             }
-    if (!lost) return 0;
+    const size_t b = ((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi;
+    J->lost[b] = list;
+    J->nlost[b] = (uint16_t)lost;
+    return lost;
+}
 
-    /* the kernel's weight over the lost voxels */
+/* Phase 2, brick (bi, bj, bk): its lost voxels raised, those of the
+ * bricks around it within one voxel taken into account. */
+static void raise_lost(const keep_job *J, float *s, int bi, int bj, int bk)
+{
+    const int *cd = J->coarse->dims;
+    const int bo[3] = {bi, bj, bk};
+    int o[3], n[3], co[3], cn[3];
+    for (int a = 0; a < 3; a++) {
+        o[a] = bo[a] * VS_BRICK;
+        n[a] = o[a] + VS_BRICK <= cd[a] ? VS_BRICK : cd[a] - o[a];
+        co[a] = o[a] - 3;
+        cn[a] = n[a] + 6;
+    }
+    const size_t csz = (size_t)cn[0] * cn[1] * cn[2];
+    float *cv = s, *cr = cv + CB * CB * CB, *tgt = cr + CB * CB * CB, *gain = tgt + CB * CB * CB,
+          *nv = gain + CB * CB * CB, *top = nv + CB * CB * CB, *tmp = top + CB * CB * CB;
+    for (size_t i = 0; i < csz; i++) tgt[i] = NAN;
+    for (int dk = -1; dk <= 1; dk++)
+        for (int dj = -1; dj <= 1; dj++)
+            for (int di = -1; di <= 1; di++) {
+                const int q[3] = {bi + di, bj + dj, bk + dk};
+                if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= J->nb[0] || q[1] >= J->nb[1] || q[2] >= J->nb[2])
+                    continue;
+                const size_t b = ((size_t)q[2] * J->nb[1] + q[1]) * J->nb[0] + q[0];
+                for (int e = 0; e < J->nlost[b]; e++) {
+                    const lost_voxel *lv = &J->lost[b][e];
+                    const int l[3] = {q[0] * VS_BRICK + VS_VOXEL_DI(lv->at) - o[0],
+                                      q[1] * VS_BRICK + VS_VOXEL_DJ(lv->at) - o[1],
+                                      q[2] * VS_BRICK + VS_VOXEL_DK(lv->at) - o[2]};
+                    if (l[0] < -1 || l[1] < -1 || l[2] < -1 || l[0] > n[0] || l[1] > n[1] || l[2] > n[2]) continue;
+                    const size_t ci = ((size_t)(l[2] + 3) * cn[1] + l[1] + 3) * cn[0] + l[0] + 3;
+                    tgt[ci] = lv->t;
+                    top[ci] = lv->top;
+                }
+            }
+    read_block(J->coarse, co, cn, J->base, cv);
+    memcpy(cr, cv, csz * sizeof *cr);
+    kernel3(cr, tmp, cn);
+    /* the kernel's weight over the lost voxels; a first step, then Jacobi */
     for (size_t i = 0; i < csz; i++) gain[i] = isnan(tgt[i]) ? 0.0f : 1.0f;
     kernel3(gain, tmp, cn);
     memcpy(nv, cv, csz * sizeof *nv);
@@ -316,24 +410,32 @@ static size_t keep_brick(const keep_job *J, float *s, int bi, int bj, int bk)
         }
     }
     const int *od = J->out->dims;
-    for (int z = 0; z < n[2]; z++)
-        for (int y = 0; y < n[1]; y++)
-            for (int x = 0; x < n[0]; x++) {
-                const size_t ci = ((size_t)(z + 3) * cn[1] + y + 3) * cn[0] + x + 3;
-                if (isnan(tgt[ci])) continue;
-                vs_volume_store_floats(J->out, ((size_t)(o[2] + z) * od[1] + o[1] + y) * od[0] + o[0] + x, &nv[ci], 1);
-            }
-    return lost;
+    const size_t b = ((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi;
+    for (int e = 0; e < J->nlost[b]; e++) {
+        const uint16_t at = J->lost[b][e].at;
+        const int x = VS_VOXEL_DI(at), y = VS_VOXEL_DJ(at), z = VS_VOXEL_DK(at);
+        const size_t ci = ((size_t)(z + 3) * cn[1] + y + 3) * cn[0] + x + 3;
+        vs_volume_store_floats(J->out, ((size_t)(o[2] + z) * od[1] + o[1] + y) * od[0] + o[0] + x, &nv[ci], 1);
+    }
 }
 
-static void keep_slab(void *arg, int worker, int bk)
+static void find_slab(void *arg, int worker, int bk)
 {
     const keep_job *J = arg;
     float *s = J->scratch + (size_t)worker * J->per_worker;
     size_t lost = 0;
     for (int bj = 0; bj < J->nb[1]; bj++)
-        for (int bi = 0; bi < J->nb[0]; bi++) lost += keep_brick(J, s, bi, bj, bk);
+        for (int bi = 0; bi < J->nb[0]; bi++) lost += find_lost(J, s, bi, bj, bk);
     J->patched[bk] = lost;
+}
+
+static void raise_slab(void *arg, int worker, int bk)
+{
+    const keep_job *J = arg;
+    float *s = J->scratch + (size_t)worker * J->per_worker;
+    for (int bj = 0; bj < J->nb[1]; bj++)
+        for (int bi = 0; bi < J->nb[0]; bi++)
+            if (J->nlost[((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi]) raise_lost(J, s, bi, bj, bk);
 }
 
 /* The copy of lv patched against fine for c: *out NULL when nothing is lost. */
@@ -349,38 +451,51 @@ static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const struct 
     if (!(peak > 0.0f)) return VS_OK;
     J.eps = peak / 256.0f;
     J.peak = peak;
+    /* an iso-range with a ramp (vs_classify_setup's iso_alpha): the
+     * opacity rises over [lo - ramp, lo + ramp] and falls over [hi - ramp,
+     * hi + ramp] */
+    J.iso = !c->use_points && c->ramp > 0.0 && isfinite(c->lo);
+    if (J.iso) {
+        J.a0 = (float)(c->lo - c->ramp);
+        J.a1 = isfinite(c->hi) ? (float)(c->hi + c->ramp) : INFINITY;
+        J.inv2r = (float)(0.5 / c->ramp);
+    }
     for (int a = 0; a < 3; a++) J.dec[a] = lv->dims[a] != fine->dims[a] || lv->spacing[a] != fine->spacing[a];
     vs_relevant_grid(fine->dims, J.fnb);
     vs_relevant_grid(lv->dims, J.nb);
-    struct vs_volume *v = NULL;
-    vs_status st = vs_volume_alloc(ctx, lv->type, lv->dims, lv->spacing, &v);
-    if (st != VS_OK) return st;
-    const size_t nvox = (size_t)lv->dims[0] * lv->dims[1] * lv->dims[2];
-    memcpy(v->data, lv->data, nvox * vs_type_size(lv->type));
-    J.out = v;
+    const size_t nbt = (size_t)J.nb[0] * J.nb[1] * J.nb[2];
     const int nw = vs_pool_threads(pool);
     J.per_worker = 3 * (size_t)FB * FB * FB + 7 * (size_t)CB * CB * CB;
     J.scratch = malloc(J.per_worker * nw * sizeof *J.scratch);
     J.patched = calloc((size_t)J.nb[2], sizeof *J.patched);
+    J.lost = calloc(nbt, sizeof *J.lost);
+    J.nlost = calloc(nbt, sizeof *J.nlost);
     uint16_t *first = lift_table(c, peak);
     J.first = first;
-    if (!J.scratch || !J.patched || !first) {
-        free(first);
-        free(J.scratch);
-        free(J.patched);
-        vs_volume_release(v);
-        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
-    }
-    vs_pool_run(pool, J.nb[2], keep_slab, &J);
+    vs_status st = VS_OK;
+    struct vs_volume *v = NULL;
     size_t lost = 0;
+    if (!J.scratch || !J.patched || !J.lost || !J.nlost || !first) {
+        st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
+        goto done;
+    }
+    vs_pool_run(pool, J.nb[2], find_slab, &J);
     for (int k = 0; k < J.nb[2]; k++) lost += J.patched[k];
+    if (!lost) goto done;
+    /* the copy, then its lost voxels raised */
+    if ((st = vs_volume_alloc(ctx, lv->type, lv->dims, lv->spacing, &v)) != VS_OK) goto done;
+    memcpy(v->data, lv->data, (size_t)lv->dims[0] * lv->dims[1] * lv->dims[2] * vs_type_size(lv->type));
+    J.out = v;
+    vs_pool_run(pool, J.nb[2], raise_slab, &J);
+done:
+    if (J.lost)
+        for (size_t b = 0; b < nbt; b++) free(J.lost[b]);
+    free(J.lost);
+    free(J.nlost);
     free(first);
     free(J.scratch);
     free(J.patched);
-    if (!lost) {
-        vs_volume_release(v);
-        return VS_OK;
-    }
+    if (st != VS_OK || !v) return st;
     vs_volume_share_classification(v, lv);
     *out = v;
     return VS_OK;
