@@ -14,7 +14,7 @@ void vs_lod_cache_free(vs_lod_cache *c)
 {
     if (!c) return;
     vs_lod_keep_clear(c);
-    free(c->base_minmax);
+    for (int l = 0; l <= VS_LOD_MAX; l++) free(c->minmax[l]);
     for (int l = 1; l <= VS_LOD_MAX; l++) {
         vs_volume_release(c->level[l]);
         vs_relevant_cache_free(c->relevant[l]);

@@ -31,7 +31,7 @@ typedef struct vs_lod_cache {
     uint64_t kept_serial[VS_LOD_MAX + 1];
     float *kept_alpha;
     double kept_vmin, kept_scale;
-    float *base_minmax;
+    float *minmax[VS_LOD_MAX + 1]; /* [0]: the volume */
 } vs_lod_cache;
 
 struct vs_pool;

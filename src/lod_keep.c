@@ -31,6 +31,7 @@
 #include "relevant_class.h"
 #include "timing.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -65,6 +66,7 @@ typedef struct keep_job {
     struct vs_volume *out;
     const vs_classify *c;
     const float *fine_mm; /* min-max per brick of the fine grid */
+    const float *coarse_mm; /* and of the level */
     int fnb[3], nb[3];    /* brick grids: fine, coarse */
     int dec[3];           /* axes the level halved */
     float base;           /* what non-finite voxels and the outside read */
@@ -276,6 +278,28 @@ static void classify_n(const keep_job *J, float *x, size_t n)
     for (size_t i = 0; i < n; i++) x[i] = x[i] > alo && x[i] < ahi ? vs_classify_alpha(c, x[i]) : 0.0f;
 }
 
+/* Is every level voxel of brick (bi, bj, bk) and its ring at least half
+ * opaque?  Then none is lost.  Known for an iso-range from the min-max of
+ * the bricks around (its opacity has no dip between two values); a
+ * transfer function's table is not asked. */
+static int level_opaque(const keep_job *J, int bi, int bj, int bk)
+{
+    if (!J->iso) return 0;
+    float mn = INFINITY, mx = -INFINITY;
+    for (int k = bk - 1; k <= bk + 1; k++)
+        for (int j = bj - 1; j <= bj + 1; j++)
+            for (int i = bi - 1; i <= bi + 1; i++) {
+                if (i < 0 || j < 0 || k < 0 || i >= J->nb[0] || j >= J->nb[1] || k >= J->nb[2]) continue;
+                const float *m = J->coarse_mm + 2 * (((size_t)k * J->nb[1] + j) * J->nb[0] + i);
+                if (m[0] < mn) mn = m[0];
+                if (m[1] > mx) mx = m[1];
+            }
+    if (!(mn >= -FLT_MAX)) return 0; /* a NaN reads as base */
+    float v[2] = {mn, mx};
+    classify_n(J, v, 2);
+    return v[0] >= 0.5f * J->peak && v[1] >= 0.5f * J->peak;
+}
+
 /* Phase 1, brick (bi, bj, bk) of the level: its lost voxels, each with
  * the reconstruction it must reach and the greatest fine value under it,
  * into J->lost; their count. */
@@ -294,7 +318,7 @@ static size_t find_lost(const keep_job *J, float *s, int bi, int bj, int bk)
         flo[a] = fo[a];
         fhi[a] = fo[a] + fn[a] - 1;
     }
-    if (!fine_can_show(J, flo, fhi)) return 0;
+    if (!fine_can_show(J, flo, fhi) || level_opaque(J, bi, bj, bk)) return 0;
     const size_t fsz = (size_t)fn[0] * fn[1] * fn[2], csz = (size_t)cn[0] * cn[1] * cn[2];
     float *fv = s, *fa = fv + FB * FB * FB, *tmp = fa + FB * FB * FB, *cv = tmp + FB * FB * FB,
           *cr = cv + CB * CB * CB, *ca = cr + CB * CB * CB, *around = ca + CB * CB * CB;
@@ -440,11 +464,16 @@ static void raise_slab(void *arg, int worker, int bk)
 
 /* The copy of lv patched against fine for c: *out NULL when nothing is lost. */
 static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *fine,
-                            const float *fine_mm, const struct vs_volume *lv, const struct vs_volume *vol,
-                            const vs_classify *c, struct vs_volume **out)
+                            const float *fine_mm, const struct vs_volume *lv, const float *coarse_mm,
+                            const struct vs_volume *vol, const vs_classify *c, struct vs_volume **out)
 {
     *out = NULL;
-    keep_job J = {.fine = fine, .coarse = lv, .c = c, .fine_mm = fine_mm, .base = (float)vs_volume_base(vol)};
+    keep_job J = {.fine = fine,
+                  .coarse = lv,
+                  .c = c,
+                  .fine_mm = fine_mm,
+                  .coarse_mm = coarse_mm,
+                  .base = (float)vs_volume_base(vol)};
     float peak = 0.0f;
     for (int i = 0; i < VS_TF_TABLE; i++)
         if (c->alpha[i] > peak) peak = c->alpha[i];
@@ -533,16 +562,17 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
             cache->kept_done[m] = 0;
         }
         const struct vs_volume *fine = shown(cache, l - 1, vol);
-        float *mm = NULL;
-        if (l == 1) {
-            if (!cache->base_minmax) cache->base_minmax = vs_relevant_minmax(pool, vol);
-            mm = cache->base_minmax;
-        } else {
-            mm = vs_relevant_minmax(pool, fine);
-        }
-        if (!mm) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
-        vs_status st = keep_level(ctx, pool, fine, mm, cache->level[l], vol, c, &cache->kept[l]);
-        if (l > 1) free(mm);
+        /* min-max per brick: of the plain grids once, of a patched one anew */
+        for (int m = l - 1; m <= l; m++)
+            if (!cache->minmax[m] &&
+                !(cache->minmax[m] = vs_relevant_minmax(pool, m == 0 ? vol : cache->level[m])))
+                return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
+        float *mm = fine == vol || fine == cache->level[l - 1] ? NULL : vs_relevant_minmax(pool, fine);
+        if (fine != vol && fine != cache->level[l - 1] && !mm)
+            return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
+        vs_status st = keep_level(ctx, pool, fine, mm ? mm : cache->minmax[l - 1], cache->level[l], cache->minmax[l],
+                                  vol, c, &cache->kept[l]);
+        free(mm);
         if (st != VS_OK) return st;
         cache->kept_done[l] = 1;
         cache->kept_serial[l] = cache->level[l]->serial;
