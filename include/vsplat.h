@@ -274,7 +274,8 @@ typedef struct vs_stats {
 
     /* with lod_level > 0, voxels_relevant and the counts after it are the
      * level's; voxels_total is the volume's */
-    double ms_lod;             /* building levels of detail (if any were built)  */
+    double ms_lod;             /* building levels of detail, or patching them for
+                                  a new classification (if either was done)      */
     int lod_level;             /* level splatted: 0 full resolution, L: voxels
                                   2^L times the volume's spacing apart        */
     double ms_resample;        /* resampling to cubic voxels (if it was done)   */

@@ -91,13 +91,13 @@ int vs_lod_choose(const struct vs_volume *vol, const vs_settings *s, const vs_ca
  * with six rows of its own (a 16384-voxel row is 64 KB).  Non-finite values count as empty
  * space, as when splatted.
  *
- * Filtering before classification has a known cost: a bright structure
- * thinner than a level voxel (a CT headrest one voxel thick) is averaged
- * below the iso-value and leaves the coarse level.  Storing the average
- * opacity instead (the value clamped to the iso ramp, averaged) keeps such
- * sheets but bends the gradients of every smooth surface, whose shading
- * then shows terraces (sphere:256 at 64x64: 43.7 -> 26.7 dB against the
- * analytic sphere), so levels hold plain averages. */
+ * Levels hold plain averages, classified afterwards, so smooth surfaces
+ * keep their gradients (averaged opacity instead, the value clamped to
+ * the iso ramp, terraces their shading: sphere:256 at 64x64, 43.7 -> 26.7
+ * dB against the analytic sphere).  A structure thinner than a level voxel
+ * (a CT headrest one voxel thick) is averaged below the iso-value: what
+ * the classification loses that way is raised back per classification, in
+ * a patched copy (lod_keep.h). */
 typedef struct down_job {
     const struct vs_volume *in;
     struct vs_volume *out;
