@@ -1,7 +1,10 @@
 /* Levels of detail that keep what the classification shows (lod_keep.h).
  *
  * For level l (coarse) and the level it was made from (fine: the volume
- * itself, or level l-1 as patched), brick by brick of the coarse grid:
+ * itself, or level l-1 as patched), brick by brick of the coarse grid
+ * (skipping bricks whose fine values all lie on one side of the relevant
+ * range, or, for an iso-range, whose coarse values around are all at
+ * least half opaque), a first pass finds the lost voxels:
  *
  *  - both grids' reconstructions at their voxels, the splatting kernel
  *    2^(-2 r^2) sampled at the voxels, per axis [1 4 1]/6 (its taps past
@@ -15,15 +18,19 @@
  *    surface always has a visible coarse voxel next to its outermost ones,
  *    so it is never touched; a sheet thinner than a level voxel, averaged
  *    into the empty space on both sides, is;
- *  - the lost voxels are raised (never lowered, never above the largest
- *    fine value under them) so that the reconstruction there reaches T,
- *    the least value from the reconstruction upwards whose opacity is A:
- *    a first step divides what is missing by the kernel's weight over the
- *    lost voxels (exact for a uniform sheet, line or point), three Jacobi
- *    steps of the same kind settle uneven ones.
+ *  - each lost voxel's target T, the least value from its reconstruction
+ *    upwards whose opacity is A, and its ceiling, the largest fine value
+ *    under it.
+ * A second pass raises each brick's lost voxels (never lowered, never
+ * above the ceiling) so that the reconstruction there reaches T, counting
+ * the lost voxels of the bricks next to it within one voxel: a first step
+ * divides what is missing by the kernel's weight over the lost voxels
+ * (exact for a uniform sheet, line or point), three Jacobi steps of the
+ * same kind settle uneven ones.
  *
- * Each brick reads the plain level and the fine grid and writes only its
- * own voxels of the copy, so the copy is the same for any thread count. */
+ * Each brick reads the plain level, the fine grid and the first pass's
+ * lists, and writes only its own voxels of the copy, so the copy is the
+ * same for any thread count. */
 #include "lod_keep.h"
 #include "context.h"
 #include "pool.h"
