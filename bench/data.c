@@ -1,5 +1,5 @@
 /* vsplat-bench inputs: where the real volumes are and how each is loaded
- * (file names, raw layout and spacing from /work/shared/data/MANIFEST.md). */
+ * (file names, raw layout and spacing from ../shared/data/MANIFEST.md). */
 #include "bench.h"
 
 #include <math.h>
