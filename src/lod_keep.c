@@ -40,6 +40,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -374,7 +375,7 @@ static size_t find_lost(const keep_job *J, float *s, int bi, int bj, int bk)
                         }
                 const float t = lift(J, cr[ci], a);
                 if (!(t > cr[ci]) || !(vmax > cv[ci])) continue;
-                if (!list && !(list = malloc((size_t)VS_BRICK * VS_BRICK * VS_BRICK * sizeof *list))) return 0;
+                if (!list && !(list = malloc((size_t)VS_BRICK * VS_BRICK * VS_BRICK * sizeof *list))) return SIZE_MAX;
                 list[lost].at = (uint16_t)(x | y << VS_BRICK_BITS | z << (2 * VS_BRICK_BITS));
                 list[lost].t = t;
                 list[lost].top = vmax;
@@ -456,7 +457,14 @@ static void find_slab(void *arg, int worker, int bk)
     float *s = J->scratch + (size_t)worker * J->per_worker;
     size_t lost = 0;
     for (int bj = 0; bj < J->nb[1]; bj++)
-        for (int bi = 0; bi < J->nb[0]; bi++) lost += find_lost(J, s, bi, bj, bk);
+        for (int bi = 0; bi < J->nb[0]; bi++) {
+            const size_t n = find_lost(J, s, bi, bj, bk);
+            if (n == SIZE_MAX) { /* out of memory: keep_level reports it */
+                J->patched[bk] = SIZE_MAX;
+                return;
+            }
+            lost += n;
+        }
     J->patched[bk] = lost;
 }
 
@@ -489,8 +497,9 @@ static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const struct 
     J.peak = peak;
     /* an iso-range with a ramp (vs_classify_setup's iso_alpha): the
      * opacity rises over [lo - ramp, lo + ramp] and falls over [hi - ramp,
-     * hi + ramp] */
-    J.iso = !c->use_points && c->ramp > 0.0 && isfinite(c->lo);
+     * hi + ramp]; a band narrower than 2 ramp never reaches the plateau,
+     * and its opacity comes from the table */
+    J.iso = !c->use_points && c->ramp > 0.0 && isfinite(c->lo) && !(c->hi - c->lo < 2.0 * c->ramp);
     if (J.iso) {
         J.a0 = (float)(c->lo - c->ramp);
         J.a1 = isfinite(c->hi) ? (float)(c->hi + c->ramp) : INFINITY;
@@ -516,7 +525,13 @@ static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const struct 
         goto done;
     }
     vs_pool_run(pool, J.nb[2], find_slab, &J);
-    for (int k = 0; k < J.nb[2]; k++) lost += J.patched[k];
+    for (int k = 0; k < J.nb[2]; k++) {
+        if (J.patched[k] == SIZE_MAX) {
+            st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
+            goto done;
+        }
+        lost += J.patched[k];
+    }
     if (!lost) goto done;
     /* the copy, then its lost voxels raised */
     if ((st = vs_volume_alloc(ctx, lv->type, lv->dims, lv->spacing, &v)) != VS_OK) goto done;
