@@ -14,6 +14,7 @@
  *    level 1 (lod_keep.c): within 1 dB of full resolution against the 4x
  *    reference, its coverage within 25 % of the reference's, the ball's
  *    level untouched, the same for 1 and 2 threads and across iso changes;
+ *  - patching never raises a voxel above the finer values beneath it;
  *  - bit-identical for 1 and 2 threads; the levels and their relevant
  *    voxels are kept across frames (also across a full-resolution frame)
  *    and rebuilt when the volume changes; bad lod_pixels is refused. */
@@ -564,6 +565,48 @@ static void test_thin_shell(vs_context *ctx)
     vs_volume_release(ball);
 }
 
+/* Patching never invents a value: a raised level voxel stays at or under
+ * the largest finer value beneath it (lod_keep.c), so the patched level
+ * holds nothing above the volume's maximum.  A shell two voxels thick
+ * whose value lies just over the iso band (u8: air 0, shell SHELL, iso
+ * 100 ramp 40) is visible at full resolution; at level 1 reaching its
+ * opacity would need more than SHELL, where the ceiling holds it. */
+static void test_keep_ceiling(vs_context *ctx)
+{
+    enum { N = 64, SHELL = 150 };
+    const int d[3] = {N, N, N};
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, VS_U8, d, NULL, &v) == VS_OK, "create");
+    if (!v) return;
+    uint8_t *u = vs_volume_data(v);
+    for (int k = 0; k < N; k++)
+        for (int j = 0; j < N; j++)
+            for (int i = 0; i < N; i++) {
+                const double r = sqrt((i - 31.5) * (i - 31.5) + (j - 31.5) * (j - 31.5) + (k - 31.5) * (k - 31.5));
+                u[((size_t)k * N + j) * N + i] = fabs(r - 24.0) < 1.0 ? SHELL : 0;
+            }
+    vs_volume_update_range(v);
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 32;
+    s.has_iso = 1, s.iso_lo = 100, s.iso_hi = INFINITY, s.ramp = 40;
+    s.threads = 2;
+    vs_stats a;
+    vs_image im = tu_render(ctx, v, &s, &a);
+    const vs_volume *kept = ctx->lod ? ctx->lod->kept[a.lod_level] : NULL;
+    CHECK(a.lod_level >= 1 && kept, "the shell at 32x32: level %d, patched %d", a.lod_level, kept != NULL);
+    if (kept) {
+        const uint8_t *q = vs_volume_data((vs_volume *)kept);
+        const size_t n = (size_t)kept->dims[0] * kept->dims[1] * kept->dims[2];
+        int top = 0;
+        for (size_t i = 0; i < n; i++) top = q[i] > top ? q[i] : top;
+        CHECK(top <= SHELL, "a patched level voxel holds %d, above the volume's maximum %d", top, SHELL);
+        printf("  shell of %d at level %d: the patched level's largest value %d\n", SHELL, a.lod_level, top);
+    }
+    vs_image_free(&im);
+    vs_volume_release(v);
+}
+
 static void test_cache(vs_context *ctx, vs_volume *v)
 {
     vs_settings s;
@@ -631,6 +674,7 @@ int main(void)
     test_transform_change();
     test_thin_and_clip(ctx);
     test_thin_shell(ctx);
+    test_keep_ceiling(ctx);
     test_accuracy(ctx);
     vs_context_release(ctx);
     TEST_DONE();
