@@ -255,6 +255,16 @@ static void test_registration(vs_context *ctx, const vs_volume *v)
         }
 }
 
+/* Settings for a size x size image of the iso-surface at lo with a ramp. */
+static vs_settings iso_settings(int size, double lo, double ramp)
+{
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = size;
+    s.has_iso = 1, s.iso_lo = lo, s.iso_hi = INFINITY, s.ramp = ramp;
+    return s;
+}
+
 /* A ball in millimetres on a grid with slices 2 mm apart (a CT series'
  * shape): its levels halve x and y first. */
 static void test_anisotropic(vs_context *ctx)
@@ -273,11 +283,8 @@ static void test_anisotropic(vs_context *ctx)
                 u[((size_t)k * d[1] + j) * d[0] + i] = (uint8_t)lrint(255 * (t < 0 ? 0 : t > 1 ? 1 : t));
             }
     vs_volume_update_range(v);
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 40;
+    vs_settings s = iso_settings(40, 128, 20);
     s.azimuth = 50, s.elevation = 25;
-    s.has_iso = 1, s.iso_lo = 128, s.iso_hi = INFINITY, s.ramp = 20;
     vs_stats a, b;
     vs_image lod = tu_render(ctx, v, &s, &a);
     s.lod_pixels = 0;
@@ -376,10 +383,7 @@ static void test_thin_and_clip(vs_context *ctx)
         for (int j = 0; j < d[1]; j++)
             for (int i = 0; i < d[0]; i++) u[j * d[0] + i] = hypot(i - 80.0, j - 80.0) < 60 ? 200 : 0;
         vs_volume_update_range(v);
-        vs_settings s;
-        vs_settings_init(&s);
-        s.width = s.height = 40;
-        s.has_iso = 1, s.iso_lo = 100, s.iso_hi = INFINITY, s.ramp = 20;
+        vs_settings s = iso_settings(40, 100, 20);
         s.iso_opacity = 0.5f;
         s.elevation = 80; /* nearly face-on */
         vs_stats a;
@@ -404,11 +408,8 @@ static void test_thin_and_clip(vs_context *ctx)
     if (!v) return;
     memset(vs_volume_data(v), 10, (size_t)129 * 129 * 129);
     vs_volume_update_range(v);
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 40;
+    vs_settings s = iso_settings(40, -50, 20);
     s.azimuth = 0, s.elevation = 0;
-    s.has_iso = 1, s.iso_lo = -50, s.iso_hi = INFINITY, s.ramp = 20;
     s.iso_opacity = 0.02f;
     vs_stats a;
     vs_image lod = tu_render(ctx, v, &s, &a);
@@ -515,10 +516,7 @@ static void test_thin_shell(vs_context *ctx)
             }
     vs_volume_update_range(v);
     vs_volume_update_range(ball);
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 48;
-    s.has_iso = 1, s.iso_lo = 300, s.iso_hi = INFINITY, s.ramp = 100;
+    vs_settings s = iso_settings(48, 300, 100);
     s.azimuth = 60, s.elevation = 20;
     s.threads = 2;
     vs_stats a;
@@ -586,10 +584,7 @@ static void test_keep_ceiling(vs_context *ctx)
                 u[((size_t)k * N + j) * N + i] = fabs(r - 24.0) < 1.0 ? SHELL : 0;
             }
     vs_volume_update_range(v);
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 32;
-    s.has_iso = 1, s.iso_lo = 100, s.iso_hi = INFINITY, s.ramp = 40;
+    vs_settings s = iso_settings(32, 100, 40);
     s.threads = 2;
     vs_stats a;
     vs_image im = tu_render(ctx, v, &s, &a);
