@@ -280,15 +280,17 @@ static void free_frame(vs_frame *F, int nspans)
 }
 
 /* vol is what is splatted: the volume `full` or one of its levels of
- * detail (the classification comes from the full volume either way);
- * lod_span, when not NULL, is when that level was built, just before. */
+ * detail; cls, the full volume's classification, becomes the frame's (and
+ * is freed with it, whatever happens); lod_span, when not NULL, is when
+ * that level was built, just before. */
 static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, const struct vs_volume *full,
-                              struct vs_relevant_cache **rel_slot, const vs_settings *s, vs_image *out, vs_stats *st,
-                              const double *lod_span)
+                              vs_classify *cls, struct vs_relevant_cache **rel_slot, const vs_settings *s,
+                              vs_image *out, vs_stats *st, const double *lod_span)
 {
     double t_start = vs_now_ms();
     vs_frame F;
     memset(&F, 0, sizeof F);
+    F.cls = cls;
     F.s = s;
     F.pipeline = s->pipeline;
     for (int i = 0; i < 3; i++) F.spacing[i] = vol->spacing[i];
@@ -297,12 +299,6 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
     bin_job J = {0};
 
     if ((rc = vs_camera_setup(ctx, vol, s, &F.cam)) != VS_OK) goto fail;
-    F.cls = malloc(sizeof *F.cls);
-    if (!F.cls) {
-        rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory");
-        goto fail;
-    }
-    if ((rc = vs_classify_setup(ctx, full, s, F.cls)) != VS_OK) goto fail;
     vs_light_setup(s, &F.cam, &F.light);
     {
         /* the settings and VSPLAT_ISA both cap the instruction set */
@@ -578,8 +574,10 @@ fail:
     return rc;
 }
 
-/* The copy on cubic voxels an anisotropic grid needs (resample.h), the
- * level of detail the view asks for (lod.h), then the frame. */
+/* The classification (one a frame: the levels' patching and the frame
+ * share it), the copy on cubic voxels an anisotropic grid needs
+ * (resample.h), the level of detail the view asks for (lod.h), then the
+ * frame. */
 static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_settings *s, vs_image *out,
                             vs_stats *st)
 {
@@ -588,12 +586,15 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
     const vs_volume *base = vol;
     struct vs_relevant_cache **rel = &ctx->relevant;
     vs_settings rs, ls;
+    vs_classify *cls = malloc(sizeof *cls);
+    if (!cls) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory");
+    vs_status rc = vs_classify_setup(ctx, vol, s, cls);
+    if (rc != VS_OK) goto fail;
     /* an anisotropic grid: its copy on cubic voxels (resample.h) is what
      * is splatted, at full resolution and as the levels' source, unless it
      * cannot be made (out of memory: the grid as it is) */
     if (vs_resample_wanted(vol, s)) {
-        vs_status rc = vs_context_pool(ctx, s);
-        if (rc != VS_OK) return rc;
+        if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
         span[0] = vs_now_ms();
         if (vs_resample_get(ctx, ctx->pool, &ctx->resample, vol, &base, &ms_resample) == VS_OK) {
             vs_camera_settings_for_copy(vol, base, s, &rs);
@@ -607,11 +608,10 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
     const vs_volume *lv = base; /* what is splatted: base or a level of it */
     if (s->lod_pixels > 0.0 && !s->has_crop) {
         vs_camera cam;
-        vs_status rc = vs_camera_setup(ctx, base, s, &cam);
-        if (rc != VS_OK) return rc;
+        if ((rc = vs_camera_setup(ctx, base, s, &cam)) != VS_OK) goto fail;
         level = vs_lod_choose(base, s, &cam);
         if (level > 0) {
-            if ((rc = vs_context_pool(ctx, s)) != VS_OK) return rc;
+            if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
             if (!resampled) span[0] = vs_now_ms();
             if (vs_lod_get(ctx, ctx->pool, &ctx->lod, base, level, &lv, &ms_lod) != VS_OK) {
                 /* out of memory, or a level the volume's limits refuse:
@@ -622,19 +622,12 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         }
         if (level > 0) {
             /* the level as the classification needs it: what thin
-             * structures it lost raised back (lod_keep.h) */
-            vs_classify *cls = malloc(sizeof *cls);
-            if (!cls) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory");
+             * structures it lost raised back (lod_keep.h); out of memory
+             * patching, the plain level rather than no frame */
             double ms_keep = 0.0;
-            rc = vs_classify_setup(ctx, vol, s, cls);
-            /* out of memory patching: the plain level rather than no frame */
-            if (rc == VS_OK && vs_lod_keep(ctx, ctx->pool, ctx->lod, base, level, cls, &lv, &ms_keep) != VS_OK)
+            if (vs_lod_keep(ctx, ctx->pool, ctx->lod, base, level, cls, &lv, &ms_keep) != VS_OK)
                 lv = ctx->lod->level[level];
-            free(cls);
-            if (rc != VS_OK) return rc;
             ms_lod += ms_keep;
-        }
-        if (level > 0) {
             vs_lod_settings(base, lv, s, &ls);
             /* an iso-surface's ramp spans fewer voxels of a coarser level:
              * one sample a sheet draws its contours as rings, which the
@@ -647,7 +640,7 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         }
     }
     span[1] = vs_now_ms();
-    vs_status rc = render_splat(ctx, lv, vol, rel, s, out, st, ms_lod + ms_resample > 0.0 ? span : NULL);
+    rc = render_splat(ctx, lv, vol, cls, rel, s, out, st, ms_lod + ms_resample > 0.0 ? span : NULL);
     if (rc == VS_OK && st) {
         st->lod_level = level;
         st->ms_lod = ms_lod;
@@ -655,6 +648,9 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         st->resampled = resampled;
         st->ms_total += ms_lod + ms_resample;
     }
+    return rc;
+fail:
+    free(cls);
     return rc;
 }
 
