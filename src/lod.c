@@ -242,12 +242,9 @@ vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
         vs_volume_stamp_take(&c->from, vol);
     } else if (c->from.serial != vol->serial) {
-        /* vs_volume_set_range since: the same voxels, classified anew */
-        for (int l = 1; l <= VS_LOD_MAX && c->level[l]; l++) {
-            c->level[l]->vmin = vol->vmin;
-            c->level[l]->vmax = vol->vmax;
-            vs_volume_new_serial(c->level[l]);
-        }
+        /* vs_volume_set_range since: the same voxels, classified anew
+         * (the range was checked when vol took it) */
+        for (int l = 1; l <= VS_LOD_MAX && c->level[l]; l++) vs_volume_set_range(c->level[l], vol->vmin, vol->vmax);
     }
     if (!vs_volume_stamp_same_place(&c->from, vol)) {
         /* vs_volume_set_transform since: the same voxels, placed anew */

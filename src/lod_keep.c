@@ -589,8 +589,8 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
             if (!cache->minmax[m] &&
                 !(cache->minmax[m] = vs_relevant_minmax(pool, m == 0 ? vol : cache->level[m])))
                 return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
-        float *mm = fine == vol || fine == cache->level[l - 1] ? NULL : vs_relevant_minmax(pool, fine);
-        if (fine != vol && fine != cache->level[l - 1] && !mm)
+        float *mm = NULL; /* a patched fine level's own */
+        if (l > 1 && cache->kept[l - 1] && !(mm = vs_relevant_minmax(pool, fine)))
             return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
         vs_status st = keep_level(ctx, pool, fine, mm ? mm : cache->minmax[l - 1], cache->level[l], cache->minmax[l],
                                   vol, c, &cache->kept[l]);
@@ -600,14 +600,14 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
         cache->kept_serial[l] = cache->level[l]->serial;
     }
     if (worked) *ms = vs_now_ms() - t0;
-    /* the copy lands where its level does (vs_volume_set_transform) */
+    /* the copy lands where its level does (vs_volume_set_transform
+     * re-places the levels; a new range gives them new serials, and so
+     * new copies, made with their range) */
     for (int l = 1; l <= level; l++) {
         struct vs_volume *k = cache->kept[l];
         if (!k) continue;
         memcpy(k->affine, cache->level[l]->affine, sizeof k->affine);
         k->has_orientation = cache->level[l]->has_orientation;
-        k->vmin = cache->level[l]->vmin;
-        k->vmax = cache->level[l]->vmax;
     }
     *out = shown(cache, level, vol);
     return VS_OK;

@@ -280,12 +280,9 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
         *cache = c;
         *ms = vs_now_ms() - t0;
     } else {
-        if (c->from.serial != vol->serial) {
-            /* vs_volume_set_range since: the same voxels, classified anew */
-            c->cubic->vmin = vol->vmin;
-            c->cubic->vmax = vol->vmax;
-            vs_volume_new_serial(c->cubic);
-        }
+        /* vs_volume_set_range since: the same voxels, classified anew
+         * (the range was checked when vol took it) */
+        if (c->from.serial != vol->serial) vs_volume_set_range(c->cubic, vol->vmin, vol->vmax);
         /* vs_volume_set_transform since: the same voxels, placed anew */
         if (!vs_volume_stamp_same_place(&c->from, vol)) place_cubic(c->cubic, vol);
     }

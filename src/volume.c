@@ -248,12 +248,15 @@ void vs_volume_update_range(vs_volume *v)
     v->serial = v->data_serial = atomic_fetch_add(&volume_serial, 1) + 1; /* the data may have changed */
 }
 
+/* A fresh serial: the caches keyed on the old one are rebuilt. */
+static void new_serial(struct vs_volume *v) { v->serial = atomic_fetch_add(&volume_serial, 1) + 1; }
+
 vs_status vs_volume_set_range(vs_volume *v, double lo, double hi)
 {
     if (!v || !isfinite(lo) || !isfinite(hi) || lo > hi) return VS_ERR_INVALID_ARGUMENT;
     v->vmin = lo;
     v->vmax = hi;
-    vs_volume_new_serial(v); /* tables keyed on the range; the voxels are the same */
+    new_serial(v); /* tables keyed on the range; the voxels are the same */
     return VS_OK;
 }
 
@@ -262,8 +265,6 @@ double vs_volume_base(const struct vs_volume *v)
     if (!(v->vmin < 0.0) || !(v->vmin < v->vmax) || !(v->vmax - v->vmin <= 0.25 * FLT_MAX)) return 0.0;
     return v->vmin;
 }
-
-void vs_volume_new_serial(struct vs_volume *v) { v->serial = atomic_fetch_add(&volume_serial, 1) + 1; }
 
 void vs_volume_histogram(const vs_volume *v, double hist[VS_HISTOGRAM_BINS])
 {

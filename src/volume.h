@@ -103,8 +103,6 @@ vs_status vs_volume_alloc_shell(vs_context *ctx, vs_type type, const int dims[3]
  * shifted.  Post-classified splatting and the ray caster reconstruct the
  * values less this and add it back. */
 double vs_volume_base(const struct vs_volume *v);
-/* A fresh serial: the caches keyed on the old one are rebuilt. */
-void vs_volume_new_serial(struct vs_volume *v);
 /* Allocate a volume with checked sizes; data zeroed. Sets ctx error. */
 vs_status vs_volume_alloc(vs_context *ctx, vs_type type, const int dims[3],
                           const double spacing[3], struct vs_volume **out);
