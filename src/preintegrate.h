@@ -88,6 +88,20 @@ static inline void vs_preint_lookup(const vs_preint *p, float f, float b, float 
     vs_preint_get4(p, &a, out);
 }
 
+/* Both halves of a segment, f to m and m to b: e[0..3] the front half's
+ * look-up, e[4..7] the back half's (the middle's cell found once). */
+static inline void vs_preint_halves(const vs_preint *p, float f, float m, float b, float e[8])
+{
+    vs_preint_at a1, a2;
+    const int i = vs_preint_cell(&p->tabs, f, &a1.fx), j = vs_preint_cell(&p->tabs, m, &a1.fy),
+              k = vs_preint_cell(&p->tabs, b, &a2.fy);
+    a1.idx = (size_t)i * VS_PREINT_N + (size_t)j;
+    a2.idx = (size_t)j * VS_PREINT_N + (size_t)k;
+    a2.fx = a1.fy;
+    vs_preint_get4(p, &a1, e);
+    vs_preint_get4(p, &a2, e + 4);
+}
+
 /* The middle of the segment from sheet k to sheet k + 1 (values without
  * the frame's base).  Post-gs: the cubic with the two sheets' densities
  * and depth derivatives (Hermite), q[3] being the splatted derivative

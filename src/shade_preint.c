@@ -112,11 +112,8 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 qb = sv->next[b];
                 m = vs_preint_mid_cd(sv->prev[b], qf, qb);
             }
-            const vs_preint_at a1 = vs_preint_locate(P, qf + base, m + base),
-                               a2 = vs_preint_locate(P, m + base, qb + base);
             float *e = B.e[B.n], *gk = B.g + 3 * B.per * B.n;
-            vs_preint_get4(P, &a1, e);
-            vs_preint_get4(P, &a2, e + 4);
+            vs_preint_halves(P, qf + base, m + base, qb + base, e);
             if (mix) {
                 float *gm = gk + 3, *g1 = gk + 6;
                 /* sheet k + 1's gradient: post-gs splatted it; post-cd takes
@@ -161,11 +158,8 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
             if (!(sb.alpha[o] > 0.0f)) continue;
             const float *q = sv->q + b, *qn = sv->next + b;
             const float m = vs_preint_mid_cd(sv->prev[b + 3], q[3], qn[3]);
-            const vs_preint_at a1 = vs_preint_locate(P, q[3] + base, m + base),
-                               a2 = vs_preint_locate(P, m + base, qn[3] + base);
             float e[8], dk, sk, dn, sn;
-            vs_preint_get4(P, &a1, e);
-            vs_preint_get4(P, &a2, e + 4);
+            vs_preint_halves(P, q[3] + base, m + base, qn[3] + base, e);
             vs_post_alpha_terms(q, d0, s0, &dk, &sk);
             vs_post_alpha_terms(qn, d0, s0, &dn, &sn);
             const float d[3] = {dk, 0.5f * (dk + dn), dn}, s[3] = {sk, 0.5f * (sk + sn), sn};
