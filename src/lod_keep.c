@@ -79,7 +79,7 @@ typedef struct keep_job {
     int dec[3];           /* axes the level halved */
     float base;           /* what non-finite voxels and the outside read */
     float eps;            /* least opacity worth keeping */
-    const uint16_t *first; /* lift's table */
+    uint16_t *first;      /* lift's table */
     float peak;           /* the table's greatest opacity */
     int iso;              /* an iso-range and ramp: opacity in closed form */
     float a0, a1, inv2r;  /* its ramp's feet (lo - ramp, hi + ramp), 1 / (2 ramp) */
@@ -477,34 +477,45 @@ static void raise_slab(void *arg, int worker, int bk)
             if (J->nlost[((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi]) raise_lost(J, s, bi, bj, bk);
 }
 
-/* The copy of lv patched against fine for c: *out NULL when nothing is lost. */
-static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *fine,
-                            const float *fine_mm, const struct vs_volume *lv, const float *coarse_mm,
-                            const struct vs_volume *vol, const vs_classify *c, struct vs_volume **out)
+/* What every level's job takes from the classification c (the rest of
+ * *J zero): its opacity's peak, the closed form of an iso-range, lift's
+ * table (J->first: free it; NULL when out of memory, or when nothing is
+ * visible: peak 0). */
+static void class_job(keep_job *J, const vs_classify *c, const struct vs_volume *vol)
 {
-    *out = NULL;
-    keep_job J = {.fine = fine,
-                  .coarse = lv,
-                  .c = c,
-                  .fine_mm = fine_mm,
-                  .coarse_mm = coarse_mm,
-                  .base = (float)vs_volume_base(vol)};
-    float peak = 0.0f;
+    memset(J, 0, sizeof *J);
+    J->c = c;
+    J->base = (float)vs_volume_base(vol);
     for (int i = 0; i < VS_TF_TABLE; i++)
-        if (c->alpha[i] > peak) peak = c->alpha[i];
-    if (!(peak > 0.0f)) return VS_OK;
-    J.eps = peak / 256.0f;
-    J.peak = peak;
+        if (c->alpha[i] > J->peak) J->peak = c->alpha[i];
+    if (!(J->peak > 0.0f)) return;
+    J->eps = J->peak / 256.0f;
     /* an iso-range with a ramp (vs_classify_setup's iso_alpha): the
      * opacity rises over [lo - ramp, lo + ramp] and falls over [hi - ramp,
      * hi + ramp]; a band narrower than 2 ramp never reaches the plateau,
      * and its opacity comes from the table */
-    J.iso = !c->use_points && c->ramp > 0.0 && isfinite(c->lo) && !(c->hi - c->lo < 2.0 * c->ramp);
-    if (J.iso) {
-        J.a0 = (float)(c->lo - c->ramp);
-        J.a1 = isfinite(c->hi) ? (float)(c->hi + c->ramp) : INFINITY;
-        J.inv2r = (float)(0.5 / c->ramp);
+    J->iso = !c->use_points && c->ramp > 0.0 && isfinite(c->lo) && !(c->hi - c->lo < 2.0 * c->ramp);
+    if (J->iso) {
+        J->a0 = (float)(c->lo - c->ramp);
+        J->a1 = isfinite(c->hi) ? (float)(c->hi + c->ramp) : INFINITY;
+        J->inv2r = (float)(0.5 / c->ramp);
     }
+    J->first = lift_table(c, J->peak);
+}
+
+/* The copy of lv patched against fine for the classification in *cj
+ * (class_job): *out NULL when nothing is lost. */
+static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const keep_job *cj, const struct vs_volume *fine,
+                            const float *fine_mm, const struct vs_volume *lv, const float *coarse_mm,
+                            struct vs_volume **out)
+{
+    *out = NULL;
+    if (!(cj->peak > 0.0f)) return VS_OK; /* nothing visible: nothing lost */
+    keep_job J = *cj;
+    J.fine = fine;
+    J.coarse = lv;
+    J.fine_mm = fine_mm;
+    J.coarse_mm = coarse_mm;
     for (int a = 0; a < 3; a++) J.dec[a] = lv->dims[a] != fine->dims[a] || lv->spacing[a] != fine->spacing[a];
     vs_relevant_grid(fine->dims, J.fnb);
     vs_relevant_grid(lv->dims, J.nb);
@@ -515,12 +526,10 @@ static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const struct 
     J.patched = calloc((size_t)J.nb[2], sizeof *J.patched);
     J.lost = calloc(nbt, sizeof *J.lost);
     J.nlost = calloc(nbt, sizeof *J.nlost);
-    uint16_t *first = lift_table(c, peak);
-    J.first = first;
     vs_status st = VS_OK;
     struct vs_volume *v = NULL;
     size_t lost = 0;
-    if (!J.scratch || !J.patched || !J.lost || !J.nlost || !first) {
+    if (!J.scratch || !J.patched || !J.lost || !J.nlost) {
         st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
         goto done;
     }
@@ -543,7 +552,6 @@ done:
         for (size_t b = 0; b < nbt; b++) free(J.lost[b]);
     free(J.lost);
     free(J.nlost);
-    free(first);
     free(J.scratch);
     free(J.patched);
     if (st != VS_OK || !v) return st;
@@ -573,10 +581,19 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
         cache->kept_scale = c->scale;
     }
     const double t0 = vs_now_ms();
+    keep_job cj; /* made for the first level that needs patching */
     int worked = 0;
+    vs_status st = VS_OK;
     for (int l = 1; l <= level; l++) {
         if (cache->kept_done[l] && cache->kept_serial[l] == cache->level[l]->serial) continue;
-        worked = 1;
+        if (!worked) {
+            worked = 1;
+            class_job(&cj, c, vol);
+            if (cj.peak > 0.0f && !cj.first) {
+                st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
+                break;
+            }
+        }
         /* this level anew, and so every coarser one */
         for (int m = l; m <= VS_LOD_MAX; m++) {
             vs_volume_release(cache->kept[m]);
@@ -585,21 +602,28 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
         }
         const struct vs_volume *fine = shown(cache, l - 1, vol);
         /* min-max per brick: of the plain grids once, of a patched one anew */
-        for (int m = l - 1; m <= l; m++)
-            if (!cache->minmax[m] &&
-                !(cache->minmax[m] = vs_relevant_minmax(pool, m == 0 ? vol : cache->level[m])))
-                return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
         float *mm = NULL; /* a patched fine level's own */
-        if (l > 1 && cache->kept[l - 1] && !(mm = vs_relevant_minmax(pool, fine)))
-            return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
-        vs_status st = keep_level(ctx, pool, fine, mm ? mm : cache->minmax[l - 1], cache->level[l], cache->minmax[l],
-                                  vol, c, &cache->kept[l]);
+        for (int m = l - 1; m <= l; m++)
+            if (!cache->minmax[m] && !(cache->minmax[m] = vs_relevant_minmax(pool, m == 0 ? vol : cache->level[m])))
+                st = VS_ERR_OUT_OF_MEMORY;
+        if (st == VS_OK && l > 1 && cache->kept[l - 1] && !(mm = vs_relevant_minmax(pool, fine)))
+            st = VS_ERR_OUT_OF_MEMORY;
+        if (st != VS_OK) {
+            st = vs_set_error(ctx, st, "levels of detail: out of memory");
+            break;
+        }
+        st = keep_level(ctx, pool, &cj, fine, mm ? mm : cache->minmax[l - 1], cache->level[l], cache->minmax[l],
+                        &cache->kept[l]);
         free(mm);
-        if (st != VS_OK) return st;
+        if (st != VS_OK) break;
         cache->kept_done[l] = 1;
         cache->kept_serial[l] = cache->level[l]->serial;
     }
-    if (worked) *ms = vs_now_ms() - t0;
+    if (worked) {
+        free(cj.first);
+        *ms = vs_now_ms() - t0;
+    }
+    if (st != VS_OK) return st;
     /* the copy lands where its level does (vs_volume_set_transform
      * re-places the levels; a new range gives them new serials, and so
      * new copies, made with their range) */
