@@ -169,6 +169,9 @@ static void count_slab(void *arg, int worker, int bk)
     J->slab_count[bk] = count;
 }
 
+/* pos[] of a brick with all its voxels relevant: fill_slab skips it */
+#define WHOLE_BRICK UINT32_MAX
+
 static void fill_slab(void *arg, int worker, int bk)
 {
     (void)worker;
@@ -177,11 +180,17 @@ static void fill_slab(void *arg, int worker, int bk)
     const int k1 = (bk + 1) * VS_BRICK < d[2] ? (bk + 1) * VS_BRICK : d[2];
     for (int k = bk * VS_BRICK; k < k1; k++)
         for (int j = 0; j < d[1]; j++) {
-            size_t idx = ((size_t)k * d[1] + j) * d[0];
+            const uint8_t *m = J->mask + ((size_t)k * d[1] + j) * d[0];
             uint32_t *pb = J->pos + ((size_t)bk * nb[1] + j / VS_BRICK) * nb[0];
             const int jk = (j & (VS_BRICK - 1)) << VS_BRICK_BITS | (k & (VS_BRICK - 1)) << (2 * VS_BRICK_BITS);
-            for (int i = 0; i < d[0]; i++, idx++)
-                if (J->mask[idx]) J->vox[pb[i / VS_BRICK]++] = (vs_voxel)(jk | (i & (VS_BRICK - 1)));
+            for (int bi = 0; bi < nb[0]; bi++) {
+                if (pb[bi] == WHOLE_BRICK) continue; /* the shared block */
+                const int i1 = (bi + 1) * VS_BRICK < d[0] ? (bi + 1) * VS_BRICK : d[0];
+                uint32_t at = pb[bi];
+                for (int i = bi * VS_BRICK; i < i1; i++)
+                    if (m[i]) J->vox[at++] = (vs_voxel)(jk | (i & (VS_BRICK - 1)));
+                pb[bi] = at;
+            }
         }
 }
 
@@ -234,32 +243,46 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     J.pos = pos;
     J.slab_count = slab_count;
     vs_pool_run(pool, nb[2], count_slab, &J);
-    size_t count = 0, nonempty = 0;
+    size_t count = 0, stored = 0, nonempty = 0;
+    int whole = 0;
     for (int bk = 0; bk < nb[2]; bk++) count += slab_count[bk];
     free(slab_count);
-    for (size_t b = 0; b < nbt; b++) nonempty += pos[b] != 0;
+    for (size_t b = 0; b < nbt; b++) {
+        nonempty += pos[b] != 0;
+        if (pos[b] == VS_BRICK_VOXELS)
+            whole = 1;
+        else
+            stored += pos[b];
+    }
+    stored += whole ? VS_BRICK_VOXELS : 0;
     vs_voxel *vox;
     vs_brick *bricks;
-    const vs_status st = vs_relevant_lists(ctx, old, count, nonempty, &vox, &bricks);
+    const vs_status st = vs_relevant_lists(ctx, old, stored, nonempty, &vox, &bricks);
     if (st != VS_OK) {
         free(mask);
         free(pos);
         return st;
     }
     /* prefix sums: pos[b] becomes the first slot of brick b */
-    uint32_t run = 0;
+    uint32_t run = whole ? VS_BRICK_VOXELS : 0;
     size_t nbk = 0;
     for (int bk = 0; bk < nb[2]; bk++)
         for (int bj = 0; bj < nb[1]; bj++)
             for (int bi = 0; bi < nb[0]; bi++) {
                 size_t b = ((size_t)bk * nb[1] + bj) * nb[0] + bi;
                 uint32_t nvox = pos[b];
+                if (nvox == VS_BRICK_VOXELS) {
+                    pos[b] = WHOLE_BRICK;
+                    bricks[nbk++] = vs_relevant_brick(d, bi, bj, bk, 0, nvox);
+                    continue;
+                }
                 pos[b] = run;
                 if (nvox) {
                     bricks[nbk++] = vs_relevant_brick(d, bi, bj, bk, run, nvox);
                 }
                 run += nvox;
             }
+    if (whole) vs_relevant_whole_block(vox);
     J.vox = vox;
     vs_pool_run(pool, nb[2], fill_slab, &J);
     free(pos);
@@ -274,6 +297,7 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
         rc->scratch = NULL;
     }
     rc->count = count;
+    rc->stored = stored;
     rc->voxels = vox;
     return VS_OK;
 }

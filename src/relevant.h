@@ -37,8 +37,10 @@ typedef struct vs_relevant_cache {
     double alpha_lo, alpha_hi;
     int seam;
     /* the list, brick by brick (bricks in k, j, i order), and inside a
-     * brick ordered by k, then j, then i */
-    size_t count;
+     * brick ordered by k, then j, then i; a brick with every voxel
+     * relevant points at the block of all positions at slot 0
+     * (vs_relevant_whole_block), so `stored` can be far below `count` */
+    size_t count, stored;
     vs_voxel *voxels;
     size_t nbricks;
     vs_brick *bricks;      /* non-empty bricks only                     */

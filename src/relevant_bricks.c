@@ -325,7 +325,7 @@ static void compact_chunk(void *arg, int worker, int task)
     const int *d = S->vol->dims, *nb = S->nb;
     const size_t t1 = (size_t)(task + 1) * COMPACT_CHUNK < C->nreg ? (size_t)(task + 1) * COMPACT_CHUNK : C->nreg;
     for (size_t t = (size_t)task * COMPACT_CHUNK; t < t1; t++) {
-        if (!S->counts[t]) continue;
+        if (!S->counts[t] || S->counts[t] == VS_BRICK_VOXELS) continue; /* none, or the shared block */
         vs_voxel *out = C->vox + C->start[t];
         if (S->full[t]) {
             int o[3], e[3];
@@ -348,14 +348,20 @@ static vs_status compact_sparse(vs_context *ctx, struct vs_pool *pool, const spa
                                 vs_relevant_cache *rc, vs_relevant_cache *old)
 {
     const int *d = S->vol->dims, *nb = S->nb;
-    size_t count = 0, nonempty = 0;
+    size_t count = 0, stored = 0, nonempty = 0;
+    int whole = 0;
     for (size_t t = 0; t < nreg; t++) {
         count += S->counts[t];
         nonempty += S->counts[t] != 0;
+        if (S->counts[t] == VS_BRICK_VOXELS)
+            whole = 1;
+        else
+            stored += S->counts[t];
     }
+    stored += whole ? VS_BRICK_VOXELS : 0;
     vs_voxel *vox;
     vs_brick *bricks;
-    const vs_status st = vs_relevant_lists(ctx, old, count, nonempty, &vox, &bricks);
+    const vs_status st = vs_relevant_lists(ctx, old, stored, nonempty, &vox, &bricks);
     if (st != VS_OK) return st;
     uint32_t *start = malloc((nreg ? nreg : 1) * sizeof *start);
     if (!start) {
@@ -363,22 +369,25 @@ static vs_status compact_sparse(vs_context *ctx, struct vs_pool *pool, const spa
         free(bricks);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: cannot hold %zu voxels", count);
     }
-    uint32_t run = 0;
+    uint32_t run = whole ? VS_BRICK_VOXELS : 0;
     size_t nbk = 0;
     for (size_t t = 0; t < nreg; t++) {
-        start[t] = run;
+        const int shared = S->counts[t] == VS_BRICK_VOXELS;
+        start[t] = shared ? 0 : run;
         if (!S->counts[t]) continue;
         int o[3];
         brick_origin(S->list[t], nb, o);
-        bricks[nbk++] = vs_relevant_brick(d, o[0] / VS_BRICK, o[1] / VS_BRICK, o[2] / VS_BRICK, run, S->counts[t]);
-        run += S->counts[t];
+        bricks[nbk++] = vs_relevant_brick(d, o[0] / VS_BRICK, o[1] / VS_BRICK, o[2] / VS_BRICK, start[t], S->counts[t]);
+        if (!shared) run += S->counts[t];
     }
+    if (whole) vs_relevant_whole_block(vox);
     compact_job C = {S, start, vox, nreg};
     vs_pool_run(pool, (int)((nreg + COMPACT_CHUNK - 1) / COMPACT_CHUNK), compact_chunk, &C);
     free(start);
     rc->nbricks = nbk;
     rc->bricks = bricks;
     rc->count = count;
+    rc->stored = stored;
     rc->voxels = vox;
     rc->sparse = 1;
     return VS_OK;

@@ -38,7 +38,17 @@ static inline void *vs_relevant_take(void **old, size_t bytes)
     return p;
 }
 
-/* The list's arrays for count voxels in nonempty bricks (the voxels in
+/* A brick whose every voxel is relevant (all VS_BRICK^3 of them, the
+ * interior of a large object) holds no voxels of its own: it points at one
+ * block of all positions in k, j, i order at the list's start, so an
+ * opaque interior costs neither the build's writes nor 1 KB a brick. */
+#define VS_BRICK_VOXELS (VS_BRICK * VS_BRICK * VS_BRICK)
+static inline void vs_relevant_whole_block(vs_voxel *v)
+{
+    for (int i = 0; i < VS_BRICK_VOXELS; i++) v[i] = (vs_voxel)i;
+}
+
+/* The list's arrays for count stored voxels in nonempty bricks (the voxels in
  * old's array when there is one): VS_OK, or the error set and both NULL
  * when the count passes 2^32 - 1 or memory runs out. */
 static inline vs_status vs_relevant_lists(vs_context *ctx, vs_relevant_cache *old, size_t count, size_t nonempty,

@@ -53,12 +53,44 @@ static vs_volume *make_volume(vs_type t, const int d[3], double scale, double of
 
 static int same_list(const vs_relevant_cache *a, const vs_relevant_cache *b)
 {
-    if (a->count != b->count || a->nbricks != b->nbricks) return 0;
-    if (memcmp(a->voxels, b->voxels, a->count * sizeof *a->voxels)) return 0;
+    if (a->count != b->count || a->stored != b->stored || a->nbricks != b->nbricks) return 0;
+    if (memcmp(a->voxels, b->voxels, a->stored * sizeof *a->voxels)) return 0;
     return !memcmp(a->bricks, b->bricks, a->nbricks * sizeof *a->bricks);
 }
 
-static int cases, sparse_cases;
+static int cases, sparse_cases, shared_bricks;
+
+/* The list's shape: each brick's voxels in k, j, i order inside its box;
+ * a brick with all 512 voxels relevant points at the block of all
+ * positions at slot 0 (stored once), every other brick at its own slots
+ * after it; the bricks' counts add up to the count. */
+static int well_formed(const vs_relevant_cache *r)
+{
+    size_t sum = 0;
+    int whole = 0;
+    for (size_t b = 0; b < r->nbricks; b++) whole |= r->bricks[b].count == 512;
+    if (whole)
+        for (int i = 0; i < 512; i++)
+            if (r->voxels[i] != i) return 0;
+    for (size_t b = 0; b < r->nbricks; b++) {
+        const vs_brick *br = &r->bricks[b];
+        sum += br->count;
+        if (br->count == 0 || br->count > 512) return 0;
+        if (br->count == 512) {
+            if (br->start != 0) return 0;
+            shared_bricks++;
+            continue;
+        }
+        if ((whole && br->start < 512) || (size_t)br->start + br->count > r->stored) return 0;
+        for (uint32_t q = 0; q < br->count; q++) {
+            const vs_voxel v = r->voxels[br->start + q];
+            if (q && v <= r->voxels[br->start + q - 1]) return 0;
+            if (br->i0 + VS_VOXEL_DI(v) > br->i1 || br->j0 + VS_VOXEL_DJ(v) > br->j1 || br->k0 + VS_VOXEL_DK(v) > br->k1)
+                return 0;
+        }
+    }
+    return sum == r->count && r->stored <= r->count + (whole ? 512 : 0);
+}
 
 static void compare(struct vs_pool *pool, const vs_volume *v, const vs_settings *s, int seam, const char *what)
 {
@@ -77,6 +109,7 @@ static void compare(struct vs_pool *pool, const vs_volume *v, const vs_settings 
           "%s: sparse", what);
     if (a && b) {
         CHECK(!a->sparse, "%s: the dense list was built sparsely", what);
+        CHECK(well_formed(a) && well_formed(b), "%s, seam %d: a list is malformed", what, seam);
         CHECK(same_list(a, b), "%s, seam %d: dense %zu voxels in %zu bricks, brick by brick %zu in %zu", what, seam,
               a->count, a->nbricks, b->count, b->nbricks);
         cases++;
@@ -220,6 +253,8 @@ int main(void)
     }
     printf("%d classifications: brick by brick equals the whole grid (%d built sparsely)\n", cases, sparse_cases);
     CHECK(sparse_cases > cases / 2, "only %d of %d built brick by brick", sparse_cases, cases);
+    printf("%d bricks with every voxel relevant share one block\n", shared_bricks);
+    CHECK(shared_bricks > 0, "no list had a brick with every voxel relevant");
     test_borders(pool);
     test_reuse(pool);
     vs_pool_destroy(pool);
