@@ -9,7 +9,10 @@
  *    build time, the process's peak resident memory after each phase
  *    against the volume's size, and the PSNR of the level-of-detail frame
  *    against the full-resolution one.
- * 2. Real volumes (Colin27, the CT head, the EM stack; skipped with
+ * 2. A row of balls it generates (256x256x2048 u8; --quick 64x64x512) seen
+ *    down its length under perspective at 256^2 (--quick 64^2): depth bands
+ *    of levels against full resolution, both against the reference.
+ * 3. Real volumes (Colin27, the CT head, the EM stack; skipped with
  *    --quick) at 128^2 and 256^2, with and without levels of detail, each
  *    also compared with a reference: the full-resolution frame rendered 4x
  *    larger and box-filtered down (what the pixels should show; the
@@ -194,6 +197,83 @@ static int balls(const bench_opts *o, int runs, FILE *csv)
     return failed;
 }
 
+/* A row of balls (radius 18, every 64 voxels along z; a smooth edge 4
+ * voxels wide) seen down its length under perspective: the near balls
+ * need full resolution, the far ones a coarser level (depth bands,
+ * src/lod_depth.c). */
+static vs_volume *make_row(vs_context *ctx, const int d[3], int period)
+{
+    vs_volume *v = NULL;
+    if (vs_volume_create(ctx, VS_U8, d, NULL, &v) != VS_OK) return NULL;
+    uint8_t *p = vs_volume_data(v);
+    const double r = 18.0 * period / 64.0, w = 4.0 * period / 64.0;
+    for (int k = 0; k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++) {
+                const double x = fmod(i, period) - 0.5 * (period - 1), y = fmod(j, period) - 0.5 * (period - 1),
+                             z = fmod(k, period) - 0.5 * (period - 1);
+                const double t = (r - sqrt(x * x + y * y + z * z)) / w + 0.5;
+                p[((size_t)k * d[1] + j) * d[0] + i] = (uint8_t)lrint(255.0 * (t < 0 ? 0 : t > 1 ? 1 : t));
+            }
+    vs_volume_update_range(v);
+    return v;
+}
+
+static int depth(const bench_opts *o, int runs, FILE *csv)
+{
+    const int d[3] = {o->quick ? 64 : 256, o->quick ? 64 : 256, o->quick ? 512 : 2048};
+    const int size = o->quick ? 64 : 256, period = o->quick ? 16 : 64;
+    vs_context *ctx = NULL;
+    if (vs_context_create(&ctx) != VS_OK) return 1;
+    vs_volume *v = make_row(ctx, d, period);
+    vs_context_release(ctx);
+    if (!v) return 1;
+    vs_settings s;
+    settings_for(o, &s, size, 128, 20, 10, 80);
+    s.perspective_fov = 60;
+    s.zoom = 2.0;
+    bench_case c[2];
+    char name[96];
+    snprintf(name, sizeof name, "row %dx%dx%d, perspective 60", d[0], d[1], d[2]);
+    bench_case_set(&c[0], name, v, &s);
+    s.lod_pixels = 0;
+    snprintf(name, sizeof name, "row %dx%dx%d, perspective 60 --no-lod", d[0], d[1], d[2]);
+    bench_case_set(&c[1], name, v, &s);
+    c[0].keep_image = c[1].keep_image = 1;
+    int failed = bench_run("lod depth bands", c, 2, runs);
+    vs_image large = {0, 0, NULL}, ref = {0, 0, NULL};
+    {
+        vs_context *rc = NULL;
+        vs_settings rs = s;
+        rs.width = rs.height = 4 * size;
+        if (vs_context_create(&rc) == VS_OK && vs_render(rc, v, &rs, &large, NULL) == VS_OK) ref = shrink(&large, 4);
+        vs_context_release(rc);
+        vs_image_free(&large);
+    }
+    printf("\nLevels of detail by depth: post-cd, %d^2, perspective 60, view 10,80, zoom 2, iso 128 ramp 20, %d "
+           "threads, median ms over %d interleaved runs; load average %s\n",
+           size, s.threads, runs, bench_loadavg());
+    printf("%-48s %6s %10s %12s %14s\n", "case", "level", "median_ms", "splatted", "psnr_vs_ref");
+    double med[2];
+    for (int i = 0; i < 2; i++) {
+        const bench_summary m = bench_summarize(&c[i], bench_m_total);
+        med[i] = m.median;
+        const double pr = !c[i].failed && ref.rgba ? psnr(&c[i].img, &ref) : NAN;
+        printf("%-48s %6d %10.1f %12llu %14.1f\n", c[i].name, c[i].warm.lod_level, m.median,
+               (unsigned long long)c[i].warm.voxels_splatted, pr);
+        if (csv)
+            fprintf(csv, "%s,%d,%d,%.3f,%llu,%.2f\n", c[i].name, size, c[i].warm.lod_level, m.median,
+                    (unsigned long long)c[i].warm.voxels_splatted, pr);
+    }
+    const double pf = !c[0].failed && !c[1].failed ? psnr(&c[0].img, &c[1].img) : NAN;
+    printf("full resolution / depth bands: %.2fx; bands against full resolution %.1f dB\n", med[1] / med[0], pf);
+    free(ref.rgba);
+    bench_cases_free(c, 2);
+    bench_contexts_release();
+    vs_volume_release(v);
+    return failed;
+}
+
 static int real(const bench_opts *o, int runs, FILE *csv)
 {
     static const struct {
@@ -256,6 +336,10 @@ int bench_lod(const bench_opts *o)
     FILE *csv = bench_result_open(o, "lod_balls.csv");
     if (csv) fprintf(csv, "case,size,level,median_ms,splatted,lod_build_ms,list_build_ms,psnr_vs_full,psnr_vs_ref\n");
     int failed = balls(o, runs, csv);
+    if (csv) fclose(csv);
+    csv = bench_result_open(o, "lod_depth.csv");
+    if (csv) fprintf(csv, "case,size,nearest_level,median_ms,splatted,psnr_vs_ref\n");
+    failed += depth(o, runs, csv);
     if (csv) fclose(csv);
     if (!o->quick) {
         csv = bench_result_open(o, "lod_real.csv");

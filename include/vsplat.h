@@ -215,9 +215,11 @@ typedef struct vs_settings {
     /* levels of detail: a volume seen small is splatted from a low-pass
      * filtered copy decimated by 2 per axis, the coarsest whose voxels lie
      * at most lod_pixels apart on the image (along the volume's finest
-     * axis; under perspective at its nearest point; half that for pre and
-     * post-alpha, which have no pre-integration), so that a frame costs
-     * what its pixels cost.  Default 1; 0 renders full resolution.  The
+     * axis; half that for pre and post-alpha, which have no
+     * pre-integration), so that a frame costs what its pixels cost.  Under
+     * perspective the view is split into depth bands, each splatted from
+     * the level its nearest depth allows (stats' lod_level is the nearest
+     * band's).  Default 1; 0 renders full resolution.  The
      * levels are built on first use and kept in the context.  Not with a
      * crop box (full resolution there). */
     double lod_pixels;

@@ -61,6 +61,11 @@ typedef struct vs_frame {
     double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */
     int clip_hi_open[3];             /* 1: a point on clip_hi is outside (a crop
                                         face shared with the next brick)       */
+    int show0, show1;                /* the sheets [show0, show1) shaded and
+                                        composited: one depth band of a view
+                                        split by level of detail (lod_depth.h);
+                                        the rest are only splatted as far as
+                                        the band's sheets need them            */
 
     /* per brick of relevant voxels: view-space bounds of its voxel centres
      * (x, y pixels; z view units), for binning and brick-level culling */

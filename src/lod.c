@@ -56,6 +56,12 @@ int vs_lod_choose(const struct vs_volume *vol, const vs_settings *s, const vs_ca
             if (sc > scale) scale = sc;
         }
     }
+    return vs_lod_choose_at(vol, s, cam, scale);
+}
+
+int vs_lod_choose_at(const struct vs_volume *vol, const vs_settings *s, const vs_camera *cam, double scale)
+{
+    if (!(s->lod_pixels > 0.0) || s->has_crop) return 0;
     /* pre and post-alpha keep one level finer.  Pre has no pre-integrated
      * segments: an iso ramp spans half as many voxels a level up, and one
      * sample a sheet draws its contours as rings (Colin27 pre at 64x64

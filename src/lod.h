@@ -36,10 +36,14 @@ typedef struct vs_lod_cache {
 
 struct vs_pool;
 /* The coarsest level whose voxels lie at most s->lod_pixels apart on the
- * image (at the volume's nearest point under perspective), measured along
+ * image (at the volume's nearest point under perspective: lod_depth.h
+ * splits such a view by depth), measured along
  * the volume's finest axis; 0 when lod_pixels is 0, a crop box is set, or
  * the volume is too small to decimate. */
 int vs_lod_choose(const struct vs_volume *vol, const vs_settings *s, const vs_camera *cam);
+/* The same where the image is `scale` times the size at depth 0
+ * (vs_camera_scale): what a depth band of a perspective view needs. */
+int vs_lod_choose_at(const struct vs_volume *vol, const vs_settings *s, const vs_camera *cam, double scale);
 /* Level `level` (>= 1) of vol, built (with the levels before it) on `pool`
  * if the cache does not hold it; *ms the time spent building (0 if none). */
 vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache, const struct vs_volume *vol,

@@ -1,14 +1,11 @@
-/* vs_render: validate, set up the frame (camera, classification, lighting,
- * kernel tables, relevant voxels), transform and bin the voxels into tiles,
- * run the tiles on the worker pool, and sum the workers' statistics. */
-#include "abi.h"
+/* A splatted frame (render.h): set up the frame (camera, lighting, kernel
+ * tables, relevant voxels), transform and bin the voxels into tiles, run
+ * the tiles on the worker pool, and sum the workers' statistics.  The
+ * settings' checks and the choice of what is splatted: render_entry.c. */
 #include "context.h"
-#include "raycast.h"
 #include "timing.h"
 #include "finish.h"
-#include "lod.h"
-#include "lod_keep.h"
-#include "resample.h"
+#include "render.h"
 #include "pool.h"
 #include "preintegrate.h"
 #include "tile.h"
@@ -94,6 +91,8 @@ static void bin_task(void *arg, int worker, int c)
             bv->kl = (int)floorf((bv->z1 + frz) / fslab);
             if (hi[2] - rz < cam->near_z) bv->x0 = bv->x1 = bv->y0 = bv->y1 = NAN;
         }
+        /* a depth band: bricks no shown sheet reads are not binned */
+        if (bv->kl < F->show0 - 2 || bv->kf > F->show1 + 1) continue;
         int tx0, tx1, ty0, ty1;
         if (!tile_range(F, bv->x0, bv->x1, bv->y0, bv->y1, bv->sc, &tx0, &tx1, &ty0, &ty1)) continue;
         for (int ty = ty0; ty <= ty1; ty++)
@@ -113,39 +112,6 @@ static int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static vs_status check_settings(vs_context *ctx, const vs_settings *s)
-{
-    if ((int)s->pipeline < 0 || (int)s->pipeline > VS_PIPELINE_RAYCAST)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "unknown pipeline %d", (int)s->pipeline);
-    if (s->tile_size < 8 || s->tile_size > 4096)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "tile size %d must lie in [8, 4096]", s->tile_size);
-    if (s->threads < 0 || s->threads > 256)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "thread count %d must lie in [0, 256]", s->threads);
-    if (!(s->occlusion_threshold > 0.0 && s->occlusion_threshold <= 1.0))
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "occlusion threshold %g must lie in (0, 1]",
-                            s->occlusion_threshold);
-    if (s->seam < -1 || s->seam > 16)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "seam %d must lie in [-1, 16]", s->seam);
-    if ((int)s->isa < 0 || (int)s->isa > VS_ISA_AVX512)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "unknown ISA %d", (int)s->isa);
-    for (int i = 0; i < 4; i++)
-        if (!(s->background[i] >= 0.0f && s->background[i] <= 1.0f))
-            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "background must lie in [0,1]");
-    for (int i = 0; i < 3; i++)
-        if (!(s->material[i] >= 0.0f && s->material[i] <= 1.0f))
-            return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "material colour must lie in [0,1]");
-    if (!isfinite(s->ambient) || !isfinite(s->diffuse) || !isfinite(s->specular) || !isfinite(s->shininess) ||
-        s->ambient < 0 || s->diffuse < 0 || s->specular < 0 || s->shininess < 0 || s->shininess > 1e4)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "lighting coefficients must be finite and >= 0");
-    if (s->preintegration < -1 || s->preintegration > 1)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "preintegration must be -1 (auto), 0 or 1");
-    if (!(s->lod_pixels >= 0.0 && s->lod_pixels <= 1e6))
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "lod_pixels %g must lie in [0, 1e6] (0: full resolution)",
-                            s->lod_pixels);
-    if (s->resample < -1 || s->resample > 1)
-        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "resample must be -1 (auto), 0 or 1");
-    return VS_OK;
-}
 
 /* Perspective: skewed tables for sheet sheet_k0 + i, the footprint scaled
  * by the sheet's depth.  A sheet whose footprint is too large for tables,
@@ -279,13 +245,9 @@ static void free_frame(vs_frame *F, int nspans)
     free(F->wstats);
 }
 
-/* vol is what is splatted: the volume `full` or one of its levels of
- * detail; cls, the full volume's classification, becomes the frame's (and
- * is freed with it, whatever happens); lod_span, when not NULL, is when
- * that level was built, just before. */
-static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, const struct vs_volume *full,
-                              vs_classify *cls, struct vs_relevant_cache **rel_slot, const vs_settings *s,
-                              vs_image *out, vs_stats *st, const double *lod_span)
+vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const struct vs_volume *full,
+                          vs_classify *cls, struct vs_relevant_cache **rel_slot, const vs_settings *s,
+                          const vs_lod_band *band, vs_image *out, vs_stats *st, const double *lod_span)
 {
     double t_start = vs_now_ms();
     vs_frame F;
@@ -307,6 +269,9 @@ static vs_status render_splat(vs_context *ctx, const struct vs_volume *vol, cons
         vs_kernels_init(&F.kern, cap);
     }
     if ((rc = vs_footprint_setup(ctx, s, &F.cam, &F.fp)) != VS_OK) goto fail;
+    F.show0 = -(1 << 30);
+    F.show1 = 1 << 30;
+    if (band) vs_lod_band_sheets(band, F.cam.z_per_mm, F.fp.slab, &F.show0, &F.show1);
     {
         /* separable footprints go voxel at a time with footprint blocks
          * (and sheared axis-aligned ones with a section per sheet, below),
@@ -571,149 +536,5 @@ fail:
     free(J.counts);
     free(image);
     free_frame(&F, F.spans ? vs_pool_threads(ctx->pool) : 0);
-    return rc;
-}
-
-/* The classification (one a frame: the levels' patching and the frame
- * share it), the copy on cubic voxels an anisotropic grid needs
- * (resample.h), the level of detail the view asks for (lod.h), then the
- * frame. */
-static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_settings *s, vs_image *out,
-                            vs_stats *st)
-{
-    int level = 0, resampled = 0;
-    double ms_lod = 0.0, ms_resample = 0.0, span[2] = {0.0, 0.0};
-    const vs_volume *base = vol;
-    struct vs_relevant_cache **rel = &ctx->relevant;
-    vs_settings rs, ls;
-    vs_classify *cls = malloc(sizeof *cls);
-    if (!cls) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "out of memory");
-    vs_status rc = vs_classify_setup(ctx, vol, s, cls);
-    if (rc != VS_OK) goto fail;
-    /* an anisotropic grid: its copy on cubic voxels (resample.h) is what
-     * is splatted, at full resolution and as the levels' source, unless it
-     * cannot be made (out of memory: the grid as it is) */
-    if (vs_resample_wanted(vol, s)) {
-        if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
-        span[0] = vs_now_ms();
-        if (vs_resample_get(ctx, ctx->pool, &ctx->resample, vol, &base, &ms_resample) == VS_OK) {
-            vs_camera_settings_for_copy(vol, base, s, &rs);
-            s = &rs;
-            rel = &ctx->resample->relevant;
-            resampled = 1;
-        } else {
-            base = vol;
-        }
-    }
-    const vs_volume *lv = base; /* what is splatted: base or a level of it */
-    if (s->lod_pixels > 0.0 && !s->has_crop) {
-        vs_camera cam;
-        if ((rc = vs_camera_setup(ctx, base, s, &cam)) != VS_OK) goto fail;
-        level = vs_lod_choose(base, s, &cam);
-        if (level > 0) {
-            if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;
-            if (!resampled) span[0] = vs_now_ms();
-            if (vs_lod_get(ctx, ctx->pool, &ctx->lod, base, level, &lv, &ms_lod) != VS_OK) {
-                /* out of memory, or a level the volume's limits refuse:
-                 * the frame at full resolution rather than none */
-                level = 0;
-                lv = base;
-            }
-        }
-        if (level > 0) {
-            /* the level as the classification needs it: what thin
-             * structures it lost raised back (lod_keep.h); out of memory
-             * patching, the plain level rather than no frame */
-            double ms_keep = 0.0;
-            if (vs_lod_keep(ctx, ctx->pool, ctx->lod, base, level, cls, &lv, &ms_keep) != VS_OK)
-                lv = ctx->lod->level[level];
-            ms_lod += ms_keep;
-            vs_lod_settings(base, lv, s, &ls);
-            /* an iso-surface's ramp spans fewer voxels of a coarser level:
-             * one sample a sheet draws its contours as rings, which the
-             * pre-integrated segments between sheets do not (Colin27 at
-             * 64x64, level 2: 21.5 -> 25.7 dB against the full volume
-             * rendered at 512x512 and box-filtered) */
-            if (ls.preintegration < 0) ls.preintegration = 1;
-            s = &ls;
-            rel = &ctx->lod->relevant[level];
-        }
-    }
-    span[1] = vs_now_ms();
-    rc = render_splat(ctx, lv, vol, cls, rel, s, out, st, ms_lod + ms_resample > 0.0 ? span : NULL);
-    if (rc == VS_OK && st) {
-        st->lod_level = level;
-        st->ms_lod = ms_lod;
-        st->ms_resample = ms_resample;
-        st->resampled = resampled;
-        st->ms_total += ms_lod + ms_resample;
-    }
-    return rc;
-fail:
-    free(cls);
-    return rc;
-}
-
-static vs_status render_exclusive(vs_context *ctx, const vs_volume *vol, const vs_settings *settings, vs_image *out,
-                                  vs_stats *stats)
-{
-    if (!vol || !settings || !out) return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "vs_render: NULL argument");
-    out->width = out->height = 0;
-    out->rgba = NULL;
-    /* the caller's layouts of settings and stats, whatever header it was
-     * built with, to and from the library's own (src/abi.c) */
-    vs_settings full;
-    vs_status rc = vs_settings_import(ctx, settings, &full);
-    if (rc != VS_OK) return rc;
-    const vs_settings *s = &full;
-    vs_stats st_full, *st = stats ? &st_full : NULL;
-    rc = check_settings(ctx, s);
-    if (rc != VS_OK) return rc;
-    if (s->has_crop) {
-        if (s->pipeline == VS_PIPELINE_RAYCAST)
-            return vs_set_error(ctx, VS_ERR_UNSUPPORTED, "the crop box is not supported by the ray caster");
-        for (int a = 0; a < 3; a++)
-            if (!(s->crop_lo[a] >= 0 && s->crop_lo[a] < s->crop_hi[a] && s->crop_hi[a] <= vol->dims[a]))
-                return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT,
-                                    "crop box %d..%d on axis %d must lie in 0..%d and not be empty", s->crop_lo[a],
-                                    s->crop_hi[a], a, vol->dims[a]);
-    }
-    if (s->pipeline == VS_PIPELINE_RAYCAST) {
-        const double t0 = vs_now_ms();
-        rc = vs_raycast_render(ctx, vol, s, out, st);
-        if (rc == VS_OK && s->trace) { /* one span: its rows are not traced */
-            vs_span_buf b = {0};
-            const double t1 = vs_now_ms();
-            vs_span_add(&b, VS_SPAN_FRAME, 0, -1, t0, t1);
-            vs_span_add(&b, VS_SPAN_RAYCAST, 0, -1, t0, t1);
-            vs_trace_append(s->trace, &b);
-            vs_trace_frame_done(s->trace);
-            free(b.s);
-        }
-    } else if (s->isa > VS_ISA_SCALAR && s->isa > vs_isa_detect())
-        /* asking for more than the CPU has is a usage error, not a fallback */
-        rc = vs_set_error(ctx, VS_ERR_UNSUPPORTED, "ISA %s is not supported by this CPU (best: %s)",
-                          vs_isa_name(s->isa), vs_isa_name(vs_isa_detect()));
-    else
-        rc = render_lod(ctx, vol, s, out, st);
-    if (rc == VS_OK && stats) vs_stats_export(st, stats, s->stats_size);
-    return rc;
-}
-
-vs_status vs_render(vs_context *ctx, const vs_volume *vol, const vs_settings *settings, vs_image *out,
-                    vs_stats *stats)
-{
-    if (!ctx) return VS_ERR_INVALID_ARGUMENT;
-    /* one call at a time per context (vsplat.h): a second thread is told
-     * so, without touching the caches or the message the first one uses */
-    if (atomic_exchange(&ctx->busy, 1)) {
-        if (out) {
-            out->width = out->height = 0;
-            out->rgba = NULL;
-        }
-        return VS_ERR_BUSY;
-    }
-    vs_status rc = render_exclusive(ctx, vol, settings, out, stats);
-    atomic_store(&ctx->busy, 0);
     return rc;
 }

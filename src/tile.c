@@ -219,7 +219,7 @@ void vs_tile_render(void *arg, int worker, int task)
 
     /* sheet k is shaded once sheet k + ahead is complete */
     const int ahead = st->ahead;
-    for (int k = kmin - ahead; nbr > 0 && k <= kmax; k++) {
+    for (int k = kmin - ahead; nbr > 0 && k <= kmax && k < F->show1; k++) {
         if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) break;
         const int cur = (k - kbase) % R, prev = (k - 1 - kbase + R) % R, nxt = (k + 1 - kbase) % R;
         const int opening = k + ahead;
@@ -244,6 +244,11 @@ void vs_tile_render(void *arg, int worker, int task)
             }
         }
         if (k < kmin) continue;
+        if (k < F->show0) { /* before the band: splatted only for the band's gradients */
+            clear_rect(ring[ahead ? prev : cur], t.stride, ch, &bbox[ahead ? prev : cur]);
+            rect_clear(&bbox[ahead ? prev : cur]);
+            continue;
+        }
         ws->tiles_total++;
         ws->sheets++;
         /* tile counter: only the touched part of the sheet is shaded */

@@ -464,23 +464,6 @@ static void test_accuracy(vs_context *ctx)
     vs_volume_release(v);
 }
 
-/* A box filter of an image to 1/f of its size. */
-static vs_image shrink(const vs_image *a, int f)
-{
-    vs_image o = {a->width / f, a->height / f, NULL};
-    o.rgba = calloc((size_t)o.width * o.height * 4, sizeof(float));
-    if (!o.rgba) return o;
-    for (int y = 0; y < o.height; y++)
-        for (int x = 0; x < o.width; x++)
-            for (int c = 0; c < 4; c++) {
-                double acc = 0;
-                for (int j = 0; j < f; j++)
-                    for (int i = 0; i < f; i++) acc += a->rgba[4 * ((size_t)(y * f + j) * a->width + x * f + i) + c];
-                o.rgba[4 * ((size_t)y * o.width + x) + c] = (float)(acc / (f * f));
-            }
-    return o;
-}
-
 /* A shell one voxel thick (a cap of a sphere, like a CT headrest: air
  * -1000, the shell 2000) beside a smooth ball, at a size that splats level
  * 1: the filtered level averages the shell below the iso-value, so unless
@@ -527,7 +510,7 @@ static void test_thin_shell(vs_context *ctx)
     vs_image full = tu_render(ctx, v, &s, NULL);
     s.width = s.height = 4 * 48;
     vs_image big = tu_render(ctx, v, &s, NULL), big_ball = tu_render(ctx, ball, &s, NULL);
-    vs_image ref = shrink(&big, 4), ref_ball = shrink(&big_ball, 4);
+    vs_image ref = tu_shrink(&big, 4), ref_ball = tu_shrink(&big_ball, 4);
     const double pl = tu_psnr(ctx, &lod, &ref), pf = tu_psnr(ctx, &full, &ref);
     const double shell_lod = alpha_sum(&lod) - alpha_sum(&lod_ball), shell_ref = alpha_sum(&ref) - alpha_sum(&ref_ball);
     CHECK(a.lod_level == 1, "the thin shell at 48x48 splats level %d, not 1", a.lod_level);

@@ -126,6 +126,24 @@ static inline double tu_psnr(vs_context *ctx, const vs_image *a, const vs_image 
     return d.psnr;
 }
 
+/* A box filter of an image to 1/f of its size (a supersampled frame made
+ * a reference for the small one). */
+static inline vs_image tu_shrink(const vs_image *a, int f)
+{
+    vs_image o = {a->width / f, a->height / f, NULL};
+    o.rgba = calloc((size_t)o.width * o.height * 4, sizeof(float));
+    if (!o.rgba) return o;
+    for (int y = 0; y < o.height; y++)
+        for (int x = 0; x < o.width; x++)
+            for (int c = 0; c < 4; c++) {
+                double acc = 0;
+                for (int j = 0; j < f; j++)
+                    for (int i = 0; i < f; i++) acc += a->rgba[4 * ((size_t)(y * f + j) * a->width + x * f + i) + c];
+                o.rgba[4 * ((size_t)y * o.width + x) + c] = (float)(acc / (f * f));
+            }
+    return o;
+}
+
 /* A synthetic scene (vs_volume_scene), or NULL after a failed check. */
 static inline vs_volume *tu_scene(vs_context *ctx, const char *spec)
 {
