@@ -119,6 +119,22 @@ static vs_image shrink(const vs_image *a, int f)
     return o;
 }
 
+/* The reference for frame s of v: full resolution at 4x the size,
+ * box-filtered (an empty image if it fails). */
+static vs_image reference(const vs_volume *v, const vs_settings *s)
+{
+    vs_image large = {0, 0, NULL}, ref = {0, 0, NULL};
+    vs_context *rc = NULL;
+    vs_settings rs = *s;
+    rs.width = 4 * s->width;
+    rs.height = 4 * s->height;
+    rs.lod_pixels = 0;
+    if (vs_context_create(&rc) == VS_OK && vs_render(rc, v, &rs, &large, NULL) == VS_OK) ref = shrink(&large, 4);
+    vs_context_release(rc);
+    vs_image_free(&large);
+    return ref;
+}
+
 static int balls(const bench_opts *o, int runs, FILE *csv)
 {
     const int big[3] = {1400, 1400, 1100}, qbig[3] = {280, 280, 220};
@@ -152,16 +168,7 @@ static int balls(const bench_opts *o, int runs, FILE *csv)
     c[2].keep_image = 1;
     failed += bench_run("lod balls, full resolution", c + 2, 1, runs < 3 ? runs : 3);
     const double rss2 = peak_rss_gb(), now2 = resident_gb(); /* both lists still held */
-    /* the reference: full resolution at 4x the size, box-filtered */
-    vs_image large = {0, 0, NULL}, ref = {0, 0, NULL};
-    {
-        vs_context *rc = NULL;
-        vs_settings rs = s;
-        rs.width = rs.height = 4 * size;
-        if (vs_context_create(&rc) == VS_OK && vs_render(rc, vb, &rs, &large, NULL) == VS_OK) ref = shrink(&large, 4);
-        vs_context_release(rc);
-        vs_image_free(&large);
-    }
+    vs_image ref = reference(vb, &s); /* s is the full-resolution frame's */
 
     printf("\nLevels of detail, balls: post-cd, %d^2, view 30,20, iso 100 ramp 10, %d threads, median ms over %d "
            "interleaved runs; machine: %s; load average %s\n",
@@ -241,15 +248,7 @@ static int depth(const bench_opts *o, int runs, FILE *csv)
     bench_case_set(&c[1], name, v, &s);
     c[0].keep_image = c[1].keep_image = 1;
     int failed = bench_run("lod depth bands", c, 2, runs);
-    vs_image large = {0, 0, NULL}, ref = {0, 0, NULL};
-    {
-        vs_context *rc = NULL;
-        vs_settings rs = s;
-        rs.width = rs.height = 4 * size;
-        if (vs_context_create(&rc) == VS_OK && vs_render(rc, v, &rs, &large, NULL) == VS_OK) ref = shrink(&large, 4);
-        vs_context_release(rc);
-        vs_image_free(&large);
-    }
+    vs_image ref = reference(v, &s);
     printf("\nLevels of detail by depth: post-cd, %d^2, perspective 60, view 10,80, zoom 2, iso 128 ramp 20, %d "
            "threads, median ms over %d interleaved runs; load average %s\n",
            size, s.threads, runs, bench_loadavg());
