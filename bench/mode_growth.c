@@ -1,5 +1,5 @@
 /* vsplat-bench growth: how frame time grows with the volume (sphere:N,
- * N = 32..512, fixed image; at full resolution against the relevant-voxel
+ * N = 32..1024, fixed image; at full resolution against the relevant-voxel
  * count, and with levels of detail against the volume's voxel count) and
  * with the image size (sphere:128, 128^2..2048^2), with least-squares
  * slopes on log-log axes. */
@@ -53,15 +53,15 @@ int bench_growth(const bench_opts *o)
 {
     double t0 = bench_now_ms();
     const int runs = bench_runs(o, 3, 1);
-    static const int vol_full[] = {32, 64, 128, 256, 512}, vol_quick[] = {32, 64, 128, 256};
+    static const int vol_full[] = {32, 64, 128, 256, 512, 1024}, vol_quick[] = {32, 64, 128, 256};
     static const int img_full[] = {128, 256, 512, 1024, 2048}, img_quick[] = {128, 256, 512, 1024};
     const int *vn = o->quick ? vol_quick : vol_full, *in = o->quick ? img_quick : img_full;
-    const int nv = o->quick ? 4 : 5, ni = o->quick ? 4 : 5;
+    const int nv = o->quick ? 4 : 6, ni = o->quick ? 4 : 5;
     const int vol_image = o->quick ? 128 : 256;
     const int img_volume = 128;
     int failed = 0;
 
-    vs_volume *vols[5] = {0}, *ivol = NULL;
+    vs_volume *vols[6] = {0}, *ivol = NULL;
     for (int i = 0; i < nv; i++) {
         char key[64];
         snprintf(key, sizeof key, "scene:sphere:%d", vn[i]);
@@ -84,14 +84,14 @@ int bench_growth(const bench_opts *o)
         return 2;
     }
 
-    bench_case cases[15];
+    bench_case cases[17];
     int n = 0;
     for (int i = 0; i < nv; i++) add_case(&cases[n++], o, vols[i], vn[i], vol_image, 0);
     for (int i = 0; i < ni; i++) add_case(&cases[n++], o, ivol, img_volume, in[i], 1);
     for (int i = 0; i < nv; i++) add_case(&cases[n++], o, vols[i], vn[i], vol_image, 2);
     failed += bench_run("growth", cases, n, runs);
 
-    double xv[5], yv[5], xi[5], yi[5], xl[5], yl[5];
+    double xv[6], yv[6], xi[5], yi[5], xl[6], yl[6];
     printf("\nGrowth: post-cd, view 20,15, threads %d (0 = one per core), median ms over %d interleaved run%s; "
            "machine: %s; load average %s\n",
            o->threads, runs, runs == 1 ? "" : "s", bench_machine(), bench_loadavg());

@@ -66,6 +66,10 @@ typedef struct vs_frame {
                                         split by level of detail (lod_depth.h);
                                         the rest are only splatted as far as
                                         the band's sheets need them            */
+    const float *under;              /* a band behind nearer ones: their picture
+                                        (straight RGBA, width*height), which the
+                                        tiles' compositing and occlusion start
+                                        from; NULL: from nothing               */
 
     /* per brick of relevant voxels: view-space bounds of its voxel centres
      * (x, y pixels; z view units), for binning and brick-level culling */

@@ -1,5 +1,5 @@
 /* Levels of detail by depth (lod_depth.h): the bands of a perspective
- * view and laying their images together. */
+ * view, the background under their picture, their statistics summed. */
 #include "lod_depth.h"
 #include "finish.h"
 
@@ -57,20 +57,6 @@ void vs_lod_band_sheets(const vs_lod_band *b, double z_per_mm, double slab, int 
 {
     *show0 = sheet_at(b->z0, z_per_mm, slab, 1 << 30);
     *show1 = sheet_at(b->z1, z_per_mm, slab, 1 << 30);
-}
-
-void vs_image_over(float *front, const float *back, size_t npix)
-{
-    for (size_t i = 0; i < npix; i++) {
-        float *f = front + 4 * i;
-        const float *b = back + 4 * i;
-        const float t = 1.0f - f[3], a = f[3] + t * b[3];
-        for (int c = 0; c < 3; c++) {
-            const float rgb = f[c] * f[3] + t * b[c] * b[3];
-            f[c] = a > 0.0f ? rgb / a : 0.0f;
-        }
-        f[3] = a;
-    }
 }
 
 void vs_image_background(float *img, size_t npix, const float bg[4])

@@ -1,9 +1,10 @@
 /* Levels of detail by depth: a perspective view whose far part is seen
  * smaller than its near part is split into depth bands, each splatted
- * from the level its nearest depth needs, and the bands' images are laid
- * front over back.  Each band's sheets are reconstructed from one level
+ * from the level its nearest depth needs, nearest first.  Each band's sheets are reconstructed from one level
  * only; the band shades and composites its own sheets and splats the ones
- * before it no further than its gradients need (frame.h, show0/show1). */
+ * before it no further than its gradients need (frame.h, show0/show1),
+ * compositing behind the picture of the bands in front, whose opaque
+ * pixels cull its voxels (frame.h, under). */
 #ifndef VS_LOD_DEPTH_H
 #define VS_LOD_DEPTH_H
 
@@ -27,8 +28,6 @@ int vs_lod_bands(const struct vs_volume *vol, const vs_settings *s, const vs_cam
 /* The sheets [*show0, *show1) of slab thickness `slab` (view units,
  * z_per_mm of them a mm) whose slabs fill the band. */
 void vs_lod_band_sheets(const vs_lod_band *b, double z_per_mm, double slab, int *show0, int *show1);
-/* Straight RGBA images: front becomes front over back. */
-void vs_image_over(float *front, const float *back, size_t npix);
 /* Straight RGBA over the background (vs_settings.background), as a frame
  * finishes its pixels. */
 void vs_image_background(float *img, size_t npix, const float bg[4]);

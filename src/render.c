@@ -247,7 +247,8 @@ static void free_frame(vs_frame *F, int nspans)
 
 vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const struct vs_volume *full,
                           vs_classify *cls, struct vs_relevant_cache **rel_slot, const vs_settings *s,
-                          const vs_lod_band *band, vs_image *out, vs_stats *st, const double *lod_span)
+                          const vs_lod_band *band, const float *under, vs_image *out, vs_stats *st,
+                          const double *lod_span)
 {
     double t_start = vs_now_ms();
     vs_frame F;
@@ -272,6 +273,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     F.show0 = -(1 << 30);
     F.show1 = 1 << 30;
     if (band) vs_lod_band_sheets(band, F.cam.z_per_mm, F.fp.slab, &F.show0, &F.show1);
+    F.under = under;
     {
         /* separable footprints go voxel at a time with footprint blocks
          * (and sheared axis-aligned ones with a section per sheet, below),

@@ -93,7 +93,8 @@ static int band_progress_fn(void *user, double fraction)
 }
 
 /* A perspective view in depth bands, each from its level (lod_depth.h),
- * nearest first, laid front over back; cls is freed. */
+ * nearest first, each composited behind the picture of those in front;
+ * cls is freed. */
 static vs_status render_bands(vs_context *ctx, const vs_volume *base, const vs_volume *vol, vs_classify *cls,
                               struct vs_relevant_cache **rel0, const vs_settings *s, vs_lod_band *band, int nband,
                               vs_image *out, vs_stats *st, double *ms_lod)
@@ -135,19 +136,17 @@ static vs_status render_bands(vs_context *ctx, const vs_volume *base, const vs_v
             ls[b].progress = band_progress_fn;
             ls[b].progress_user = &bp;
         }
-        rc = vs_render_splat(ctx, lv[b], vol, copy, rel[b], &ls[b], &band[b], &img, st ? &bs : NULL, NULL);
+        /* the bands in front are what this one composites behind */
+        rc = vs_render_splat(ctx, lv[b], vol, copy, rel[b], &ls[b], &band[b], out->rgba, &img, st ? &bs : NULL, NULL);
         if (rc != VS_OK) break;
-        if (!out->rgba) {
-            *out = img;
-            if (st) {
-                *st = bs;
-                st->lod_level = band[b].level;
-            }
-        } else {
-            vs_image_over(out->rgba, img.rgba, (size_t)img.width * img.height);
-            free(img.rgba);
-            if (st) vs_stats_add(st, &bs);
+        if (st && !out->rgba) {
+            *st = bs;
+            st->lod_level = band[b].level;
+        } else if (st) {
+            vs_stats_add(st, &bs);
         }
+        free(out->rgba);
+        *out = img;
     }
     free(cls);
     if (rc != VS_OK) {
@@ -217,7 +216,7 @@ static vs_status render_lod(vs_context *ctx, const vs_volume *vol, const vs_sett
         }
     }
     span[1] = vs_now_ms();
-    rc = vs_render_splat(ctx, lv, vol, cls, rel, s, NULL, out, st, ms_lod + ms_resample > 0.0 ? span : NULL);
+    rc = vs_render_splat(ctx, lv, vol, cls, rel, s, NULL, NULL, out, st, ms_lod + ms_resample > 0.0 ? span : NULL);
     if (rc == VS_OK && st) {
         st->lod_level = level;
         st->ms_lod = ms_lod;

@@ -198,6 +198,22 @@ void vs_tile_render(void *arg, int worker, int task)
         live0[y] = 0;
         live1[y] = t.tw;
     }
+    if (F->under) {
+        /* a depth band behind nearer ones: compositing goes on from their
+         * picture, and what they made opaque culls this band's voxels */
+        for (int y = 0; y < t.th; y++)
+            for (int x = 0; x < t.tw; x++) {
+                const float *u = F->under + 4 * ((size_t)(t.y0 + y) * W + (t.x0 + x));
+                float *a = acc + 4 * ((size_t)y * t.tw + x);
+                for (int i = 0; i < 3; i++) a[i] = u[i] * u[3];
+                a[3] = u[3];
+                opaque += u[3] >= thr;
+            }
+        if (s->occlusion && opaque > 0) {
+            vs_build_sat(&t, acc, thr, sat, 0);
+            for (int y = 0; y < t.th; y++) vs_shrink_live(&t, acc, y, live0, live1);
+        }
+    }
     for (int i = 0; i < R; i++) {
         ring[i] = sheets + (size_t)i * sheet_floats + (size_t)VS_APRON * ch;
         rect_clear(&bbox[i]);
@@ -219,7 +235,8 @@ void vs_tile_render(void *arg, int worker, int task)
 
     /* sheet k is shaded once sheet k + ahead is complete */
     const int ahead = st->ahead;
-    for (int k = kmin - ahead; nbr > 0 && k <= kmax && k < F->show1; k++) {
+    const int covered = s->occlusion && opaque >= npix; /* nearer bands hid the whole tile */
+    for (int k = kmin - ahead; nbr > 0 && !covered && k <= kmax && k < F->show1; k++) {
         if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) break;
         const int cur = (k - kbase) % R, prev = (k - 1 - kbase + R) % R, nxt = (k + 1 - kbase) % R;
         const int opening = k + ahead;
