@@ -32,7 +32,7 @@ void vs_context_release(vs_context *ctx)
     vs_resample_cache_free(ctx->resample);
     if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
     free(ctx->shade_lut);
-    vs_preint_free(ctx->preint);
+    for (int i = 0; i < VS_PREINT_KEEP; i++) vs_preint_free(ctx->preint[i]);
     vs_tile_scratch_release(ctx->scratch, ctx->nscratch);
     if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */
     if (ctx->dicom_handle) dlclose(ctx->dicom_handle);

@@ -7,6 +7,9 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+/* pre-integration tables kept, one per slab thickness */
+#define VS_PREINT_KEEP 3
+
 struct vs_pool;
 struct vs_relevant_cache;
 struct vs_lod_cache;
@@ -27,9 +30,12 @@ struct vs_context {
     struct vs_shade_lut *shade_lut;     /* normal and shading tables, rebuilt
                                            only when their size or the light
                                            changes (a headlight never does) */
-    struct vs_preint *preint;           /* pre-integration table, rebuilt only
-                                           when the classification or the slab
-                                           changes */
+    struct vs_preint *preint[VS_PREINT_KEEP]; /* pre-integration tables, one
+                                           per slab in use (the depth bands of a
+                                           perspective view splat up to three
+                                           levels a frame), rebuilt only when the
+                                           classification changes */
+    int preint_next;                    /* the table a new slab replaces */
     struct vs_tile_scratch *scratch;    /* per worker, reused across frames       */
     int nscratch;
     const struct vs_oiio_api *oiio;     /* image I/O module, loaded on first use */

@@ -364,15 +364,23 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
                          s->pipeline == VS_PIPELINE_POST_ALPHA;
         const int want = s->preintegration >= 0 ? s->preintegration : (s->tf_count > 0 || s->iso_opacity < 1.0f);
         if (post && want) {
-            if (!ctx->preint && !(ctx->preint = calloc(1, sizeof *ctx->preint))) {
+            /* the table of this slab (halves), else the next one replaced */
+            int slot = -1;
+            for (int i = 0; i < VS_PREINT_KEEP; i++)
+                if (ctx->preint[i] && ctx->preint[i]->key_slab == 0.5 * slab_len) slot = i;
+            if (slot < 0) {
+                slot = ctx->preint_next;
+                ctx->preint_next = (slot + 1) % VS_PREINT_KEEP;
+            }
+            if (!ctx->preint[slot] && !(ctx->preint[slot] = calloc(1, sizeof *ctx->preint[slot]))) {
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
                 goto fail;
             }
-            if (!vs_preint_update(ctx->preint, F.cls, 0.5 * slab_len, ctx->pool)) { /* halves */
+            if (!vs_preint_update(ctx->preint[slot], F.cls, 0.5 * slab_len, ctx->pool)) {
                 rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "pre-integration table: out of memory");
                 goto fail;
             }
-            F.preint = ctx->preint;
+            F.preint = ctx->preint[slot];
         }
         F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals, F.preint != NULL);
     }
