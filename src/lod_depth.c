@@ -14,8 +14,10 @@ static int level_at(const struct vs_volume *vol, const vs_settings *s, const vs_
 int vs_lod_bands(const struct vs_volume *vol, const vs_settings *s, const vs_camera *cam,
                  vs_lod_band band[VS_LOD_MAX + 1])
 {
-    band[0] = (vs_lod_band){vs_lod_choose(vol, s, cam), -INFINITY, INFINITY};
-    if (!cam->persp || band[0].level == VS_LOD_MAX) return 1;
+    if (!cam->persp) {
+        band[0] = (vs_lod_band){vs_lod_choose(vol, s, cam), -INFINITY, INFINITY};
+        return 1;
+    }
     double zn = INFINITY, zf = -INFINITY;
     for (int c = 0; c < 8; c++) {
         const double idx[3] = {c & 1 ? vol->dims[0] - 1 : 0, c & 2 ? vol->dims[1] - 1 : 0,
@@ -26,6 +28,8 @@ int vs_lod_bands(const struct vs_volume *vol, const vs_settings *s, const vs_cam
         if (v[2] > zf) zf = v[2];
     }
     if (zn < cam->near_z) zn = cam->near_z;
+    /* the nearest corner's level (vs_lod_choose's), then coarser ones */
+    band[0] = (vs_lod_band){level_at(vol, s, cam, zn), -INFINITY, INFINITY};
     int n = 1;
     while (zn < zf && level_at(vol, s, cam, zf) > band[n - 1].level) {
         /* the first depth where a coarser level will do: the level grows
