@@ -1,7 +1,8 @@
 /* Levels of detail by depth: a perspective view whose far part is seen
  * smaller than its near part is split into depth bands, each splatted
- * from the level its nearest depth needs, nearest first.  Each band's sheets are reconstructed from one level
- * only; the band shades and composites its own sheets and splats the ones
+ * from the level its nearest depth needs, nearest first.  Each band's
+ * sheets are reconstructed from one level only; the band shades and
+ * composites its own sheets and splats the ones
  * before it no further than its gradients need (frame.h, show0/show1),
  * compositing behind the picture of the bands in front, whose opaque
  * pixels cull its voxels (frame.h, under). */
