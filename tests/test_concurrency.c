@@ -104,6 +104,9 @@ typedef struct gate {
 static int gated_progress(void *user, double fraction)
 {
     gate *g = user;
+    /* the closing call (1.0) comes after the tiles; a cancel there is too
+     * late to count, so only a call during the tiles opens the gate */
+    if (fraction >= 1.0) return 0;
     pthread_mutex_lock(&g->mu);
     g->calls++;
     if (!g->inside) {
