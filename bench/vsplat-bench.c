@@ -19,7 +19,7 @@ static void usage(FILE *f)
             "  table1    the paper's Table 1 (stage times per image and pipeline) and speedups over it\n"
             "  error     error (RMSE, PSNR, SSIM, edge width) against run time, Pareto front marked *\n"
             "  scaling   frame time for 1..N threads (and 2N), pinned and not, speedups\n"
-            "  growth    frame time against relevant voxels and against image size, log-log slopes\n"
+            "  growth    frame time against voxels and image size, with and without levels of detail\n"
             "  kernels   one SIMD kernel at a time per ISA, peak FMA rate, rasterize stage per ISA\n"
             "  limits    this machine's bandwidths (L1..DRAM) and peak add/FMA rates per ISA, and each\n"
             "            stage of the head's frames as a share of its limit (roofline plot, counters)\n"

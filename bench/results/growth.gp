@@ -9,10 +9,10 @@ set logscale xy
 set grid
 set key top left
 set ylabel 'frame ms'
-set xlabel 'relevant voxels, or voxels with levels of detail (sphere:N, 256^2)'
-set title 'slope 0.31 full resolution, 0.22 levels of detail'
-plot 'growth.dat' index 0 using 1:2 with linespoints pt 7 title 'full resolution (relevant)', 'growth.dat' index 2 using 1:2 with linespoints pt 5 title 'levels of detail (all voxels)'
-set xlabel 'pixels (sphere:128)'
-set title 'slope 0.49'
-plot 'growth.dat' index 1 using 1:2 with linespoints pt 7 title 'frame time'
+set xlabel 'voxels (sphere:N, 256^2)'
+set title 'slope 0.41 full resolution, 0.18 levels of detail'
+plot 'growth.dat' index 0 using 1:2 with linespoints pt 7 title 'full resolution', 'growth.dat' index 1 using 1:2 with linespoints pt 5 title 'levels of detail'
+set xlabel 'pixels'
+set title 'slopes 0.51, -0.00, 0.68'
+plot 'growth.dat' index 2 using 1:2 with linespoints pt 7 title 'sphere:128', 'growth.dat' index 3 using 1:2 with linespoints pt 9 title 'sphere:512, full resolution', 'growth.dat' index 4 using 1:2 with linespoints pt 5 title 'sphere:512, levels of detail'
 unset multiplot
