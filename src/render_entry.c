@@ -79,17 +79,30 @@ static int level_setup(vs_context *ctx, const vs_volume *base, const vs_settings
     return level;
 }
 
-/* A band's progress as a share of the whole view's. */
+/* A band's sheet thickness in view units (a level's smallest spacing). */
+static double sheet_step(const vs_volume *v, const vs_settings *s)
+{
+    double unit = INFINITY;
+    for (int a = 0; a < 3; a++) unit = v->spacing[a] < unit ? v->spacing[a] : unit;
+    return s->slab * unit;
+}
+
+/* A band's progress as a share of the whole view's.  The frame ignores the
+ * answer to its closing call (1.0), which for a band before the last is a
+ * call in the middle of the view: that answer is kept and acted on. */
 typedef struct band_progress {
     vs_progress_fn fn;
     void *user;
     double from, share;
+    int cancel;
 } band_progress;
 
 static int band_progress_fn(void *user, double fraction)
 {
-    const band_progress *b = user;
-    return b->fn(b->user, b->from + b->share * fraction);
+    band_progress *b = user;
+    const int r = b->fn(b->user, b->from + b->share * fraction);
+    if (fraction >= 1.0 && r) b->cancel = 1;
+    return r;
 }
 
 /* A perspective view in depth bands, each from its level (lod_depth.h),
@@ -115,9 +128,11 @@ static vs_status render_bands(vs_context *ctx, const vs_volume *base, const vs_v
         if (band[b].level > 0)
             band[b].level = level_setup(ctx, base, &clear, cls, band[b].level, &lv[b], &ls[b], &rel[b], ms_lod);
         if (b > 0) {
-            double unit = INFINITY;
-            for (int a = 0; a < 3; a++) unit = lv[b]->spacing[a] < unit ? lv[b]->spacing[a] : unit;
-            const double t = ls[b].slab * unit;
+            /* on the coarser of the two bands' sheet grids: band b is the
+             * coarser one unless its level fell back to a finer one (out
+             * of memory), when band b - 1's last sheet would reach past a
+             * boundary on band b's grid and a slab would count twice */
+            const double t = fmax(sheet_step(lv[b], &ls[b]), sheet_step(lv[b - 1], &ls[b - 1]));
             band[b].z0 = band[b - 1].z1 = ceil(band[b].z0 / t) * t;
         }
     }
@@ -131,13 +146,17 @@ static vs_status render_bands(vs_context *ctx, const vs_volume *base, const vs_v
         memcpy(copy, cls, sizeof *copy);
         vs_image img = {0, 0, NULL};
         vs_stats bs;
-        band_progress bp = {s->progress, s->progress_user, (double)b / nband, 1.0 / nband};
+        band_progress bp = {s->progress, s->progress_user, (double)b / nband, 1.0 / nband, 0};
         if (s->progress) {
             ls[b].progress = band_progress_fn;
             ls[b].progress_user = &bp;
         }
         /* the bands in front are what this one composites behind */
         rc = vs_render_splat(ctx, lv[b], vol, copy, rel[b], &ls[b], &band[b], out->rgba, &img, st ? &bs : NULL, NULL);
+        if (rc == VS_OK && bp.cancel && b + 1 < nband) {
+            free(img.rgba);
+            rc = vs_set_error(ctx, VS_ERR_CANCELLED, "render cancelled by the progress callback");
+        }
         if (rc != VS_OK) break;
         if (st && !out->rgba) {
             *st = bs;

@@ -211,6 +211,48 @@ static void test_no_gap(vs_context *ctx)
     vs_volume_release(v);
 }
 
+/* A cancel answered once, at the first call at or past the first band's
+ * end: that call is the band's closing one, which a single frame ignores;
+ * between bands it must cancel the view (it was dropped, and the view
+ * rendered on). */
+typedef struct once {
+    double at;
+    int calls, answered;
+} once;
+
+static int cancel_once(void *user, double fraction)
+{
+    once *o = user;
+    o->calls++;
+    if (o->answered || fraction < o->at) return 0;
+    o->answered = 1;
+    return 1;
+}
+
+static void test_cancel(vs_context *ctx, const vs_volume *v)
+{
+    vs_settings s = row_view(48);
+    vs_lod_band band[VS_LOD_MAX + 1];
+    const int n = bands_of(ctx, v, &s, band);
+    if (n < 2) {
+        CHECK(0, "the row's view has %d band", n);
+        return;
+    }
+    for (int threads = 1; threads <= 2; threads++) {
+        once o = {1.0 / n - 1e-9, 0, 0};
+        s.threads = threads;
+        s.progress = cancel_once;
+        s.progress_user = &o;
+        vs_image img = {0, 0, NULL};
+        const vs_status st = vs_render(ctx, v, &s, &img, NULL);
+        CHECK(st == VS_ERR_CANCELLED, "%d threads: cancel at %.3f of %d bands: %s", threads, o.at, n,
+              vs_status_string(st));
+        CHECK(img.rgba == NULL, "a cancelled view left an image");
+        vs_image_free(&img);
+    }
+    printf("  a cancel answered once at the first band's end: cancelled\n");
+}
+
 static void test_threads(vs_context *ctx, const vs_volume *v)
 {
     static const vs_pipeline pipes[] = {VS_PIPELINE_PRE, VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS,
@@ -240,6 +282,7 @@ int main(void)
         test_exact_split(ctx, v);
         test_quality(ctx, v);
         test_threads(ctx, v);
+        test_cancel(ctx, v);
         vs_volume_release(v);
     }
     test_no_gap(ctx);
