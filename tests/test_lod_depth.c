@@ -217,13 +217,12 @@ static void test_no_gap(vs_context *ctx)
  * rendered on). */
 typedef struct once {
     double at;
-    int calls, answered;
+    int answered;
 } once;
 
 static int cancel_once(void *user, double fraction)
 {
     once *o = user;
-    o->calls++;
     if (o->answered || fraction < o->at) return 0;
     o->answered = 1;
     return 1;
@@ -239,7 +238,7 @@ static void test_cancel(vs_context *ctx, const vs_volume *v)
         return;
     }
     for (int threads = 1; threads <= 2; threads++) {
-        once o = {1.0 / n - 1e-9, 0, 0};
+        once o = {1.0 / n - 1e-9, 0};
         s.threads = threads;
         s.progress = cancel_once;
         s.progress_user = &o;
