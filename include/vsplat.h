@@ -166,8 +166,11 @@ typedef struct vs_settings {
     double occlusion_threshold;/* opacity above which a pixel is occluded       */
     int tile_counters;         /* shade only touched regions (default 1)        */
     int tile_size;             /* parallel tile edge in pixels (default 64)     */
-    int exact_normals;         /* 0: Clyne-Dennis LUT normals and shading table */
-    int normal_lut_size;       /* angle bins of the shading table (default 256) */
+    int exact_normals;         /* 0: Clyne-Dennis LUT normals and shading table
+                                  (post-shaded), 16-bit normal codes and their
+                                  table (pre-shaded)                            */
+    int normal_lut_size;       /* angle bins of the post-shaded shading table
+                                  (default 256)                                 */
 
     /* execution */
     int threads;               /* 0 = one per physical core                      */

@@ -7,6 +7,7 @@
  * gathers the voxels overlapping it (general footprints: rasterize_sheet).
  * The rasterizers themselves are rasterize.c's. */
 #include "activate.h"
+#include "normal_code.h"
 #include "occlusion.h"
 #include "rasterize.h"
 
@@ -92,6 +93,7 @@ void vs_expand_brick(tile_state *ts, uint32_t b, int opening)
     const float near_z = (float)F->cam.near_z;
     const uint32_t row = (uint32_t)F->vol->dims[0], plane = row * (uint32_t)F->vol->dims[1];
     const uint32_t first = br->i0 + row * br->j0 + plane * br->k0; /* linear index of the brick's corner */
+    const uint32_t code0 = F->ncode ? vs_normal_code_slot(F->vol, br->i0, br->j0, br->k0) : 0;
     /* transform and bin (a kernel); with perspective the box test follows
      * per voxel, as its footprint's size depends on its depth */
     vs_project_in P;
@@ -132,6 +134,7 @@ void vs_expand_brick(tile_state *ts, uint32_t b, int opening)
         e->y = y;
         e->z = z;
         e->v = v;
+        e->c = code0 + vx;
         e->kl = kl;
         if (!F->use_blocks) F->stages->weights(F, e, 1u, (float(*)[4])e->w); /* else once it survives culling */
     }

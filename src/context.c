@@ -1,6 +1,7 @@
 /* Context lifetime, settings defaults and names. */
 #include "context.h"
 #include "shade_lut.h"
+#include "normal_code.h"
 #include "pool.h"
 #include "preintegrate.h"
 #include "lod.h"
@@ -32,6 +33,10 @@ void vs_context_release(vs_context *ctx)
     vs_resample_cache_free(ctx->resample);
     if (ctx->shade_lut) vs_shade_lut_free(ctx->shade_lut);
     free(ctx->shade_lut);
+    vs_normal_table_free(ctx->normal_table);
+    free(ctx->normal_table);
+    for (int i = 0; ctx->normal_codes && i < VS_NORMAL_CODES_KEEP; i++) vs_normal_codes_free(&ctx->normal_codes[i]);
+    free(ctx->normal_codes);
     for (int i = 0; i < VS_PREINT_KEEP; i++) vs_preint_free(ctx->preint[i]);
     vs_tile_scratch_release(ctx->scratch, ctx->nscratch);
     if (ctx->oiio_handle) dlclose(ctx->oiio_handle); /* loaded RTLD_NODELETE: OpenImageIO's threads stay valid */

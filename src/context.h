@@ -15,6 +15,8 @@ struct vs_relevant_cache;
 struct vs_lod_cache;
 struct vs_resample_cache;
 struct vs_shade_lut;
+struct vs_normal_table;
+struct vs_normal_codes;
 struct vs_context {
     char error[1024]; /* room for a list of the series in a DICOM folder */
     struct vs_pool *pool;       /* created lazily, reused across frames        */
@@ -30,6 +32,12 @@ struct vs_context {
     struct vs_shade_lut *shade_lut;     /* normal and shading tables, rebuilt
                                            only when their size or the light
                                            changes (a headlight never does) */
+    struct vs_normal_table *normal_table; /* pre-shaded voxels' Phong terms per
+                                           normal code, rebuilt when the view
+                                           or the light changes */
+    struct vs_normal_codes *normal_codes; /* VS_NORMAL_CODES_KEEP volumes' voxel
+                                           normal codes */
+    uint64_t normal_codes_clock;
     struct vs_preint *preint[VS_PREINT_KEEP]; /* pre-integration tables, one
                                            per slab in use (the depth bands of a
                                            perspective view splat up to three

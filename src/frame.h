@@ -43,6 +43,10 @@ typedef struct vs_frame {
     int sheet_k0, nsheet_skew;       /* sheet of sheet_skew[0], how many       */
     int skew_maxvec, skew_maxrows;   /* largest block over the tables in use   */
     vs_shade_lut lut;
+    const float (*nterms)[2];        /* pre-shaded, table normals: Phong terms
+                                        per normal code (normal_code.h)       */
+    _Atomic uint16_t *ncode;         /* and the voxels' codes plus one (0: not
+                                        yet), or NULL: coded per voxel          */
     vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;
     const struct vs_volume *vol;     /* what the voxels' values are read from   */

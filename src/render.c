@@ -5,6 +5,7 @@
 #include "context.h"
 #include "timing.h"
 #include "finish.h"
+#include "normal_code.h"
 #include "render.h"
 #include "pool.h"
 #include "preintegrate.h"
@@ -322,6 +323,15 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
         }
         if ((rc = vs_shade_lut_setup(ctx, s->normal_lut_size, &F.light, ctx->shade_lut)) != VS_OK) goto fail;
         F.lut = *ctx->shade_lut;
+        if (s->pipeline == VS_PIPELINE_PRE || s->pipeline == VS_PIPELINE_POST_ALPHA) {
+            if (!ctx->normal_table && !(ctx->normal_table = calloc(1, sizeof *ctx->normal_table))) {
+                rc = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "shading tables: out of memory");
+                goto fail;
+            }
+            if ((rc = vs_normal_table_setup(ctx, &F.light, F.cam.right, F.cam.up, F.cam.dir, ctx->normal_table)) != VS_OK)
+                goto fail;
+            F.nterms = (const float(*)[2])ctx->normal_table->terms;
+        }
     }
     /* opacity is per unit of the full volume's finest spacing; a level's
      * view unit is its own finest spacing, so a slab is that much longer */
@@ -389,6 +399,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     const double t_rel_end = vs_now_ms();
     double ms_relevant = rebuilt ? t_rel_end - t_rel : 0.0;
     F.vol = vol;
+    if (F.nterms) F.ncode = vs_normal_codes_get(ctx, vol);
     int nthreads = vs_pool_threads(ctx->pool);
     if (s->trace) {
         F.spans = calloc((size_t)nthreads, sizeof *F.spans);

@@ -7,8 +7,10 @@
  * divided by the splatted opacity, times the classified colour).  The
  * light model is light.c's, the tables shade_lut.c's. */
 #include "shade.h"
+#include "normal_code.h"
 
 #include <float.h>
+#include <stdatomic.h>
 #include <math.h>
 
 static inline void lookup_color(const vs_frame *F, float v, float rgb[3])
@@ -58,10 +60,7 @@ static inline void shade_gradient(const vs_frame *F, float gx, float gy, float g
 /* Splat weights of the voxels p[lane], lane in the mask `live` (at most
  * VS_PLACE_BATCH), from their linear index in the volume: density (post),
  * or classified colour times the Phong terms of its grid gradient
- * (pre-shading: once per voxel and view).  The normal-table look-ups are a
- * chain of three dependent loads that miss the cache; each level is issued
- * for the whole batch before the next, so that the misses of different
- * voxels overlap. */
+ * (pre-shading: once per voxel and view). */
 void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w[][4])
 {
     const float bscale = (float)(F->fp.b / F->fp.slab);
@@ -72,73 +71,71 @@ void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w
     }
 }
 
+/* The Phong terms of voxel e.  Table normals:
+ * the view's terms of its normal code, which a context keeps per voxel
+ * once the first frame that splats the voxel has computed it (codes are
+ * stored plus one, 0 meaning not yet; every thread computes the same code,
+ * so a race only repeats the work); exact normals: the grid gradient
+ * rotated into the eye frame and the light evaluated. */
+static inline void voxel_light(const vs_frame *F, const pend *e, float *d, float *sp)
+{
+    const uint32_t v = e->v;
+    if (F->ncode) {
+        unsigned c = atomic_load_explicit(&F->ncode[e->c], memory_order_relaxed);
+        if (c) {
+            *d = F->nterms[c - 1][0];
+            *sp = F->nterms[c - 1][1];
+            return;
+        }
+    }
+    const int *dims = F->vol->dims;
+    const int i = (int)(v % (uint32_t)dims[0]), j = (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
+              k = (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1]));
+    if (F->nterms) {
+        const int c = vs_voxel_normal_code(F->vol, i, j, k, v);
+        if (F->ncode) atomic_store_explicit(&F->ncode[e->c], (uint16_t)(c + 1), memory_order_relaxed);
+        *d = F->nterms[c][0];
+        *sp = F->nterms[c][1];
+        return;
+    }
+    const vs_camera *cam = &F->cam;
+    float g[3];
+    vs_volume_grid_gradient(F->vol, i, j, k, v, g);
+    double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
+    double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
+                   -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
+                   gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
+    double dd, ss;
+    vs_light_eval(&F->light, n, &dd, &ss);
+    *d = (float)dd;
+    *sp = (float)ss;
+}
+
 /* Pre-shaded: w[3] is the opacity (pre) or the density (post-alpha, which
  * classifies the splatted density on the sheet). */
 static inline void weights_shaded(const vs_frame *F, const pend *p, unsigned live, float w[][4], int opacity)
 {
     const float bscale = (float)(F->fp.b / F->fp.slab);
-    const int *dims = F->vol->dims;
-    const vs_camera *cam = &F->cam;
-    const vs_shade_lut *lut = &F->lut;
-    float rgb[VS_PLACE_BATCH][3], alpha[VS_PLACE_BATCH], val[VS_PLACE_BATCH], d[VS_PLACE_BATCH],
-        sp[VS_PLACE_BATCH];
-    int cell[VS_PLACE_BATCH], zrow[VS_PLACE_BATCH], li[VS_PLACE_BATCH], r[VS_PLACE_BATCH];
     for (unsigned m = live; m; m &= m - 1) {
         const int l = __builtin_ctz(m);
         const uint32_t v = p[l].v;
-        val[l] = vs_volume_density(F->vol, v);
-        alpha[l] = vs_classify_alpha(F->cls, val[l]);
-        lookup_color(F, val[l], rgb[l]);
-        float g[3];
-        vs_volume_grid_gradient(F->vol, (int)(v % (uint32_t)dims[0]), (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
-                                (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1])), v, g);
-        double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
-        double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
-                       -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),
-                       gw[0] * cam->dir[0] + gw[1] * cam->dir[1] + gw[2] * cam->dir[2]};
-        if (F->s->exact_normals) {
-            double dd, ss;
-            vs_light_eval(&F->light, n, &dd, &ss);
-            d[l] = (float)dd;
-            sp[l] = (float)ss;
-        } else {
-            cell[l] = vs_shade_lut_cell((float)n[0], (float)n[1], (float)n[2], &zrow[l]);
-        }
-    }
-    if (!F->s->exact_normals) { /* vs_shade_lut_eval, a level at a time */
-        for (unsigned m = live; m; m &= m - 1) {
-            const int l = __builtin_ctz(m);
-            li[l] = lut->lambda_bin[cell[l]];
-            r[l] = lut->radius[cell[l]];
-        }
-        for (unsigned m = live; m; m &= m - 1) {
-            const int l = __builtin_ctz(m);
-            const int pi = lut->phi_bin[zrow[l] + r[l]];
-            li[l] += pi * lut->nl;
-        }
-        for (unsigned m = live; m; m &= m - 1) {
-            const int l = __builtin_ctz(m);
-            d[l] = lut->diffuse[li[l]];
-            sp[l] = lut->specular[li[l]];
-        }
-    }
-    if (opacity) {
-        for (unsigned m = live; m; m &= m - 1) {
-            const int l = __builtin_ctz(m);
-            for (int i = 0; i < 3; i++) w[l][i] = (rgb[l][i] * d[l] + sp[l]) * alpha[l] * bscale;
-            w[l][3] = alpha[l] * bscale;
-        }
-    } else { /* post-alpha: the light's terms, opacity-weighted, and the density */
-        for (unsigned m = live; m; m &= m - 1) {
-            const int l = __builtin_ctz(m);
-            w[l][0] = d[l] * alpha[l] * bscale;
-            w[l][1] = sp[l] * alpha[l] * bscale;
-            w[l][2] = alpha[l] * bscale;
-            w[l][3] = (float)(val[l] - F->base) * bscale;
+        const float val = vs_volume_density(F->vol, v);
+        const float alpha = vs_classify_alpha(F->cls, val);
+        float d, sp;
+        voxel_light(F, &p[l], &d, &sp);
+        if (opacity) {
+            float rgb[3];
+            lookup_color(F, val, rgb);
+            for (int c = 0; c < 3; c++) w[l][c] = (rgb[c] * d + sp) * alpha * bscale;
+            w[l][3] = alpha * bscale;
+        } else { /* post-alpha: the light's terms, opacity-weighted, and the density */
+            w[l][0] = d * alpha * bscale;
+            w[l][1] = sp * alpha * bscale;
+            w[l][2] = alpha * bscale;
+            w[l][3] = (float)(val - F->base) * bscale;
         }
     }
 }
-
 
 void vs_weights_pre(const vs_frame *F, const pend *p, unsigned live, float w[][4])
 {

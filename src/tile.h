@@ -81,6 +81,8 @@ static inline void rect_merge(rect *bb, const rect *r)
 typedef struct pend {
     float x, y, z; /* view-space centre (perspective: x, y at depth 0) */
     uint32_t v;    /* linear index in the volume                    */
+    uint32_t c;    /* its slot in the kept normal codes (brick order;
+                      pre-shaded with F->ncode only)                  */
     int kl;        /* last sheet (lowered when the voxel is culled) */
     float w[4];    /* splat weights before the slab's depth integral */
 } pend;
