@@ -207,9 +207,7 @@ vs_status vs_camera_setup(vs_context *ctx, const struct vs_volume *vol,
                                    : W[r][0] * Q[0][a] + W[r][1] * Q[1][a] + W[r][2] * Q[2][a];
 
     const double extent = largest_extent(vol);
-    double unit = INFINITY;
-    for (int a = 0; a < 3; a++)
-        if (vol->spacing[a] < unit) unit = vol->spacing[a];
+    const double unit = vs_volume_finest(vol);
     cam->unit_mm = unit;
     cam->px_per_mm = s->zoom * s->width / extent;
     cam->z_per_mm = 1.0 / unit;

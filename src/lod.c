@@ -284,12 +284,7 @@ void vs_lod_settings(const struct vs_volume *vol, const struct vs_volume *lv, co
     for (int a = 1; a < 3; a++)
         if (lv->spacing[a] / vol->spacing[a] != lv->spacing[0] / vol->spacing[0]) iso = 0;
     if (!iso) {
-        double uf = INFINITY, ul = INFINITY;
-        for (int a = 0; a < 3; a++) {
-            if (vol->spacing[a] < uf) uf = vol->spacing[a];
-            if (lv->spacing[a] < ul) ul = lv->spacing[a];
-        }
-        const double slab = s->slab * uf / ul;
+        const double slab = s->slab * vs_volume_finest(vol) / vs_volume_finest(lv);
         out->slab = slab < 0.01 ? 0.01 : slab > 64.0 ? 64.0 : slab;
     }
 }

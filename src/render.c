@@ -335,12 +335,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     }
     /* opacity is per unit of the full volume's finest spacing; a level's
      * view unit is its own finest spacing, so a slab is that much longer */
-    double unit_full = INFINITY, unit_vol = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        if (full->spacing[a] < unit_full) unit_full = full->spacing[a];
-        if (vol->spacing[a] < unit_vol) unit_vol = vol->spacing[a];
-    }
-    const double slab_len = s->slab * (unit_vol / unit_full);
+    const double slab_len = s->slab * (vs_volume_finest(vol) / vs_volume_finest(full));
     for (int i = 0; i < VS_TF_TABLE; i++)
         F.alpha_corr[i] = (float)vs_opacity_correct(F.cls->alpha[i], slab_len);
     for (int i = 0; i <= 1024; i++) F.opacity_corr[i] = (float)vs_opacity_correct(i / 1024.0, slab_len);

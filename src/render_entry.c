@@ -80,12 +80,7 @@ static int level_setup(vs_context *ctx, const vs_volume *base, const vs_settings
 }
 
 /* A band's sheet thickness in view units (a level's smallest spacing). */
-static double sheet_step(const vs_volume *v, const vs_settings *s)
-{
-    double unit = INFINITY;
-    for (int a = 0; a < 3; a++) unit = v->spacing[a] < unit ? v->spacing[a] : unit;
-    return s->slab * unit;
-}
+static double sheet_step(const vs_volume *v, const vs_settings *s) { return s->slab * vs_volume_finest(v); }
 
 /* A band's progress as a share of the whole view's.  The frame ignores the
  * answer to its closing call (1.0), which for a band before the last is a

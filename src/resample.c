@@ -16,14 +16,6 @@
  * r in voxel-index units: sigma^2 = 1 / (4 ln 2). */
 static double kernel_sigma(void) { return 1.0 / sqrt(4.0 * M_LN2); }
 
-static double finest(const struct vs_volume *vol)
-{
-    double m = vol->spacing[0];
-    for (int a = 1; a < 3; a++)
-        if (vol->spacing[a] < m) m = vol->spacing[a];
-    return m;
-}
-
 /* Axis a resampled: thicker than the finest axis (not equal up to
  * rounding of the file's spacing). */
 static int thick(const struct vs_volume *vol, int a, double fine) { return vol->spacing[a] > fine * (1.0 + 1e-6); }
@@ -60,7 +52,7 @@ static int cubic_dims(const struct vs_volume *vol, double fine, int d[3])
 int vs_resample_wanted(const struct vs_volume *vol, const vs_settings *s)
 {
     if (s->resample == 0 || s->has_crop || s->pipeline == VS_PIPELINE_RAYCAST) return 0;
-    const double fine = finest(vol);
+    const double fine = vs_volume_finest(vol);
     int any = 0;
     for (int a = 0; a < 3; a++) {
         if (!thick(vol, a, fine)) continue;
@@ -213,7 +205,7 @@ static void place_cubic(struct vs_volume *cv, const struct vs_volume *vol)
 static vs_status build_cubic(vs_context *ctx, struct vs_pool *pool, const struct vs_volume *vol,
                              struct vs_volume **out)
 {
-    const double fine = finest(vol);
+    const double fine = vs_volume_finest(vol);
     int d[3];
     double sp[3];
     if (!cubic_dims(vol, fine, d))

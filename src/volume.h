@@ -67,6 +67,15 @@ static inline float vs_volume_density_above(const struct vs_volume *v, size_t i,
 /* The value at linear index i, non-finite values read as 0 (what
  * pre-shaded splatting classifies them as). */
 static inline float vs_volume_density(const struct vs_volume *v, size_t i) { return vs_volume_density_above(v, i, 0.0); }
+/* The smallest of the three spacings (mm): the view unit of depth and
+ * what opacity is per. */
+static inline double vs_volume_finest(const struct vs_volume *v)
+{
+    double m = v->spacing[0];
+    for (int a = 1; a < 3; a++)
+        if (v->spacing[a] < m) m = v->spacing[a];
+    return m;
+}
 /* Central-difference gradient on the grid at voxel (i, j, k), linear index
  * idx, in index units (one-sided at the borders; non-finite results 0):
  * what the pre-shaded pipelines shade a voxel by. */
