@@ -116,8 +116,9 @@ typedef struct vs_tf_point {
 } vs_tf_point;
 
 /* Progress callback: fraction in [0,1]; return non-zero to cancel.
- * Always called on the thread that called vs_render() (between tiles; with
- * several workers, only for tiles that thread renders). */
+ * Always called on the thread that called vs_render(): between the tiles
+ * (ray caster: rows) it renders, and every 20 ms while it waits for the
+ * other workers' tiles. */
 typedef int (*vs_progress_fn)(void *user, double fraction);
 
 /* Fields are only ever appended.  Fill it with vs_settings_init(), never by

@@ -110,5 +110,9 @@ typedef struct vs_frame {
 
 /* Render tile `task` of the frame (a vs_task_fn). */
 void vs_tile_render(void *frame, int worker, int task);
+/* Reports the frame's progress (tiles done) to the settings' callback and
+ * sets the cancel flag if it asks: between tiles on the calling thread, and
+ * while that thread waits for the other workers (vs_pool_run_watched). */
+void vs_tile_progress(void *frame);
 
 #endif

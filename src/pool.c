@@ -5,11 +5,13 @@
 #include "pool.h"
 #include "context.h" /* struct vs_context, vs_set_error */
 
+#include <errno.h>
 #include <hwloc.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <limits.h>
 #include <stdlib.h>
+#include <time.h>
 
 typedef struct vs_worker {
     struct vs_pool *pool;
@@ -192,6 +194,12 @@ int vs_pool_pin_failed(const struct vs_pool *p) { return p ? p->pin_failed : 0; 
 
 void vs_pool_run(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg)
 {
+    vs_pool_run_watched(p, ntasks, fn, arg, NULL, NULL);
+}
+
+void vs_pool_run_watched(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg, void (*watch)(void *),
+                         void *watch_arg)
+{
     if (ntasks <= 0) return;
     if (!p || p->nthreads <= 1) {
         for (int t = 0; t < ntasks; t++) fn(arg, 0, t);
@@ -217,7 +225,24 @@ void vs_pool_run(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg)
     if (rebind && hwloc_set_cpubind(p->topo, p->caller_set, HWLOC_CPUBIND_THREAD) != 0) failed = 1;
     pthread_mutex_lock(&p->lock);
     if (failed) p->pin_failed = 1;
-    while (p->running > 0) pthread_cond_wait(&p->done_cv, &p->lock);
+    while (p->running > 0) {
+        if (!watch) {
+            pthread_cond_wait(&p->done_cv, &p->lock);
+            continue;
+        }
+        struct timespec until;
+        clock_gettime(CLOCK_REALTIME, &until); /* the condition variable's clock */
+        until.tv_nsec += VS_POOL_WATCH_MS * 1000000L;
+        if (until.tv_nsec >= 1000000000L) {
+            until.tv_sec++;
+            until.tv_nsec -= 1000000000L;
+        }
+        if (pthread_cond_timedwait(&p->done_cv, &p->lock, &until) == ETIMEDOUT && p->running > 0) {
+            pthread_mutex_unlock(&p->lock);
+            watch(watch_arg);
+            pthread_mutex_lock(&p->lock);
+        }
+    }
     pthread_mutex_unlock(&p->lock);
 }
 

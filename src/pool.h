@@ -18,6 +18,12 @@ int vs_pool_pin_failed(const struct vs_pool *p);
 /* Run fn(arg, worker, task) for every task in [0, ntasks); blocks until done.
  * The calling thread takes part as worker 0. */
 void vs_pool_run(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg);
+/* The same, and while the calling thread has no task left but other workers
+ * still run theirs, it calls watch(watch_arg) every VS_POOL_WATCH_MS (a
+ * frame's progress and cancel stay live when the caller got no long task). */
+#define VS_POOL_WATCH_MS 20
+void vs_pool_run_watched(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg, void (*watch)(void *),
+                         void *watch_arg);
 /* Physical cores available to this process (respects its binding). */
 int vs_physical_cores(void);
 /* The context's pool for s->threads (0: one per physical core) and s->pin,

@@ -342,19 +342,28 @@ static void render_row(rc_job *J, int y)
     }
 }
 
-/* Pool task: image row y.  Worker 0, the thread that called vs_render,
- * reports progress; after a cancel the remaining rows return at once. */
-static void row_task(void *arg, int worker, int y)
+/* Progress (rows done) to the callback, on the thread that called
+ * vs_render: after each of its rows, and while it waits for the others'. */
+static void row_progress(void *arg)
 {
     rc_job *J = arg;
     const vs_settings *s = J->s;
+    if (atomic_load(&J->cancel) || !s->progress) return;
+    if (s->progress(s->progress_user, (double)atomic_load(&J->rows_done) / J->cam.height) != 0)
+        atomic_store(&J->cancel, 1);
+}
+
+/* Pool task: image row y; after a cancel the remaining rows return at
+ * once. */
+static void row_task(void *arg, int worker, int y)
+{
+    rc_job *J = arg;
     if (atomic_load(&J->cancel)) return;
     double t = vs_now_ms();
     render_row(J, y);
     J->ms[worker] += vs_now_ms() - t;
-    int done = atomic_fetch_add(&J->rows_done, 1) + 1;
-    if (worker == 0 && s->progress && s->progress(s->progress_user, (double)done / J->cam.height) != 0)
-        atomic_store(&J->cancel, 1);
+    atomic_fetch_add(&J->rows_done, 1);
+    if (worker == 0) row_progress(J);
 }
 
 /* ---- empty-space skipping ---- */
@@ -738,7 +747,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
     atomic_init(&J->rows_done, 0);
     atomic_init(&J->cancel, 0);
 
-    vs_pool_run(ctx->pool, J->cam.height, row_task, J);
+    vs_pool_run_watched(ctx->pool, J->cam.height, row_task, J, s->progress ? row_progress : NULL, J);
     double ms_threads = 0.0;
     for (int i = 0; i < nthreads; i++) ms_threads += J->ms[i];
     free(J->ms);

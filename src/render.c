@@ -484,7 +484,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     }
     F.image = image;
     const double t_tiles = vs_now_ms();
-    vs_pool_run(ctx->pool, F.ntiles, vs_tile_render, &F);
+    vs_pool_run_watched(ctx->pool, F.ntiles, vs_tile_render, &F, s->progress ? vs_tile_progress : NULL, &F);
     if (F.spans) {
         vs_span_add(&F.spans[0], VS_SPAN_BIN, 0, -1, t_setup, t_bin_end);
         vs_span_add(&F.spans[0], VS_SPAN_TILES, 0, -1, t_tiles, vs_now_ms());

@@ -73,6 +73,14 @@ static int scratch_reserve(vs_tile_scratch *s, size_t bytes, size_t zero)
 /* The first sheet of the tile's brick e (its kernels reach no earlier). */
 static inline int first_sheet(const vs_frame *F, const uint32_t *ent, int e) { return F->bview[ent[e]].kf; }
 
+void vs_tile_progress(void *arg)
+{
+    vs_frame *F = arg;
+    if (atomic_load(&F->cancel) || !F->s->progress) return;
+    const double frac = (double)atomic_load(&F->tiles_done) / F->ntiles;
+    if (F->s->progress(F->s->progress_user, frac)) atomic_store(&F->cancel, 1);
+}
+
 void vs_tile_render(void *arg, int worker, int task)
 {
     vs_frame *F = arg;
@@ -82,10 +90,7 @@ void vs_tile_render(void *arg, int worker, int task)
     vs_tile_scratch *scr = &F->scratch[worker];
     vs_span_buf *tr = F->spans ? &F->spans[worker] : NULL; /* tracing */
     if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) return;
-    if (worker == 0 && s->progress) {
-        double frac = (double)atomic_load(&F->tiles_done) / F->ntiles;
-        if (s->progress(s->progress_user, frac)) atomic_store(&F->cancel, 1);
-    }
+    if (worker == 0 && s->progress) vs_tile_progress(F);
     task = F->tile_order[task];
     const int W = F->cam.width, T = F->tile;
     const int tx = task % F->tiles_x, ty = task / F->tiles_x;
