@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 void vs_normal_decode(int code, double n[3])
 {
@@ -56,6 +57,7 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
     size_t n = (size_t)1 << (3 * VS_BRICK_BITS); /* whole bricks */
     for (int a = 0; a < 3; a++) n *= ((size_t)vol->dims[a] + VS_BRICK - 1) >> VS_BRICK_BITS;
     if (n > VS_NORMAL_CODES_MAX_BYTES / sizeof(uint16_t)) return NULL;
+    _Static_assert(sizeof(_Atomic uint16_t) == sizeof(uint16_t), "codes are counted as 2 bytes");
     vs_normal_codes *slots = ctx->normal_codes;
     if (!slots && !(slots = ctx->normal_codes = calloc(VS_NORMAL_CODES_KEEP, sizeof *slots))) return NULL;
     const uint64_t now = ++ctx->normal_codes_clock;
@@ -75,15 +77,19 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
     size_t kept = 0;
     for (int s = 0; s < VS_NORMAL_CODES_KEEP; s++)
         if (slots[s].code) kept += slots[s].n;
-    while (kept + n > VS_NORMAL_CODES_MAX_BYTES / sizeof(uint16_t)) {
+    while (kept + n > VS_NORMAL_CODES_ALL_BYTES / sizeof(uint16_t)) {
         int old = -1;
         for (int s = 0; s < VS_NORMAL_CODES_KEEP; s++)
             if (slots[s].code && (old < 0 || slots[s].used < slots[old].used)) old = s;
         kept -= slots[old].n;
         vs_normal_codes_free(&slots[old]);
     }
-    /* zero pages until written: a voxel no frame splats costs nothing */
-    if (!(c->code = calloc(n, sizeof *c->code))) return NULL;
+    /* zero pages until written: a brick no frame splats costs nothing (a
+     * calloc of this size may come from a heap that grew, and be written
+     * in full) */
+    void *m = mmap(NULL, n * sizeof *c->code, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (m == MAP_FAILED) return NULL;
+    c->code = m;
     c->vol = vol;
     c->data_serial = vol->data_serial;
     memcpy(c->dims, vol->dims, sizeof c->dims);
@@ -95,6 +101,6 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
 
 void vs_normal_codes_free(vs_normal_codes *c)
 {
-    free((void *)c->code);
+    if (c->code) munmap((void *)c->code, c->n * sizeof *c->code);
     memset(c, 0, sizeof *c);
 }

@@ -1,5 +1,6 @@
-/* Voxel normals as 16-bit codes on the octahedron (255 x 255 cells, the
- * direction in the volume's axis frame, spacing applied), and a table of
+/* Voxel normals as 16-bit codes on the octahedron (181 x 181 cells on its
+ * upper half, the direction in the volume's axis frame, spacing applied),
+ * and a table of
  * the light's Phong terms per code for the current view (normal_code.c).
  * Shading a pre-shaded voxel is then one look-up: no rotation into the eye
  * frame and no chain of dependent Clyne-Dennis look-ups per voxel. */
@@ -19,6 +20,7 @@
 #endif
 #define VS_NORMAL_ZERO (VS_NORMAL_SIDE * VS_NORMAL_SIDE) /* no direction */
 #define VS_NORMAL_CODES (VS_NORMAL_ZERO + 1)
+_Static_assert(VS_NORMAL_CODES < 65535, "a kept code is stored plus one in 16 bits");
 
 /* The code of a gradient.  Lighting is two-sided, so g and -g shade alike
  * and only the half with gz >= 0 is coded: its octahedron face, the
@@ -74,13 +76,19 @@ void vs_normal_table_free(vs_normal_table *tab);
  * (each frame codes its voxels itself, with the same result). */
 #define VS_NORMAL_CODES_KEEP 3
 #define VS_NORMAL_CODES_MAX_BYTES ((size_t)32 << 20)
+/* all slots together: a volume at the limit and its levels of detail,
+ * which a perspective view's depth bands ask for in every frame */
+#define VS_NORMAL_CODES_ALL_BYTES (VS_NORMAL_CODES_MAX_BYTES + VS_NORMAL_CODES_MAX_BYTES / 4)
+_Static_assert(ATOMIC_SHORT_LOCK_FREE == 2, "kept codes are plain 16-bit stores and loads");
 typedef struct vs_normal_codes {
     const struct vs_volume *vol; /* key: the volume, its data and spacing */
     uint64_t data_serial;
     int dims[3];
     double spacing[3];
     uint64_t used;               /* when last used (least recently replaced) */
-    _Atomic uint16_t *code;      /* [n]: code + 1, 0 while unknown           */
+    _Atomic uint16_t *code;      /* [n]: code + 1, 0 while unknown; mapped
+                                    anonymous memory, so untouched bricks
+                                    stay unbacked however the heap grew    */
     size_t n;
 } vs_normal_codes;
 /* The codes of vol from the context's slots, a new zeroed array if
@@ -100,12 +108,15 @@ static inline uint32_t vs_normal_code_slot(const struct vs_volume *vol, int i0, 
 }
 
 /* The code of voxel (i, j, k), linear index idx: its grid gradient over
- * the spacing. */
+ * the spacing, scaled by the finest spacing (the direction is the same, and
+ * factors of at most 1 cannot overflow a finite gradient). */
 static inline int vs_voxel_normal_code(const struct vs_volume *vol, int i, int j, int k, size_t idx)
 {
     float g[3];
     vs_volume_grid_gradient(vol, i, j, k, idx, g);
-    return vs_normal_code(g[0] / (float)vol->spacing[0], g[1] / (float)vol->spacing[1], g[2] / (float)vol->spacing[2]);
+    const double f = vs_volume_finest(vol);
+    return vs_normal_code(g[0] * (float)(f / vol->spacing[0]), g[1] * (float)(f / vol->spacing[1]),
+                          g[2] * (float)(f / vol->spacing[2]));
 }
 
 #endif

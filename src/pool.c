@@ -116,7 +116,15 @@ struct vs_pool *vs_pool_create(int threads, int pin)
     }
     pthread_mutex_init(&p->lock, NULL);
     pthread_cond_init(&p->start_cv, NULL);
-    pthread_cond_init(&p->done_cv, NULL);
+    {
+        /* the watched wait times out on the monotonic clock: setting the
+         * wall clock back must not silence a frame's progress */
+        pthread_condattr_t ca;
+        pthread_condattr_init(&ca);
+        pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+        pthread_cond_init(&p->done_cv, &ca);
+        pthread_condattr_destroy(&ca);
+    }
     if (pin && have_topo && threads > 1) {
         /* Spread over the cores this process is allowed to use (respects
          * taskset / cgroups): one worker per core before any SMT sibling. */
@@ -231,7 +239,7 @@ void vs_pool_run_watched(struct vs_pool *p, int ntasks, vs_task_fn fn, void *arg
             continue;
         }
         struct timespec until;
-        clock_gettime(CLOCK_REALTIME, &until); /* the condition variable's clock */
+        clock_gettime(CLOCK_MONOTONIC, &until); /* done_cv's clock */
         until.tv_nsec += VS_POOL_WATCH_MS * 1000000L;
         if (until.tv_nsec >= 1000000000L) {
             until.tv_sec++;

@@ -5,6 +5,7 @@
  * context keeps per voxel follow the data (a rewritten volume is re-coded)
  * and give the image of a fresh context for any thread count. */
 #include "light.h"
+#include "context.h"
 #include "normal_code.h"
 #include "testutil.h"
 
@@ -279,6 +280,46 @@ static void test_kept_codes(void)
     vs_volume_release(v);
 }
 
+/* The codes are kept: after a frame, the context's array for the volume
+ * holds codes, each that of its voxel (a brick's slot is
+ * vs_normal_code_slot of its lowest voxel, plus the voxel's place in it). */
+static void test_codes_kept(void)
+{
+    vs_volume *v = tu_scene(ctx, "sphere:48"); /* isotropic: splatted as it is */
+    if (!v) return;
+    vs_context *c;
+    if (vs_context_create(&c) != VS_OK) {
+        vs_volume_release(v);
+        return;
+    }
+    vs_settings s;
+    vs_settings_init(&s);
+    s.pipeline = VS_PIPELINE_POST_ALPHA;
+    s.width = s.height = 96;
+    vs_image img = render_with(c, v, &s);
+    vs_image_free(&img);
+    const _Atomic uint16_t *kept = vs_normal_codes_get(c, v);
+    const int *d = v->dims;
+    size_t filled = 0, wrong = 0;
+    for (int k = 0; kept && k < d[2]; k++)
+        for (int j = 0; j < d[1]; j++)
+            for (int i = 0; i < d[0]; i++) {
+                const uint32_t slot = vs_normal_code_slot(v, i & ~(VS_BRICK - 1), j & ~(VS_BRICK - 1), k & ~(VS_BRICK - 1)) +
+                                      (uint32_t)((i & (VS_BRICK - 1)) | (j & (VS_BRICK - 1)) << VS_BRICK_BITS |
+                                                 (k & (VS_BRICK - 1)) << (2 * VS_BRICK_BITS));
+                const unsigned got = atomic_load(&kept[slot]);
+                if (!got) continue;
+                filled++;
+                const size_t idx = (size_t)i + (size_t)d[0] * ((size_t)j + (size_t)d[1] * (size_t)k);
+                wrong += got - 1 != (unsigned)vs_voxel_normal_code(v, i, j, k, idx);
+            }
+    printf("kept codes after one frame: %zu voxels, %zu wrong\n", filled, wrong);
+    CHECK(kept != NULL && filled > 1000, "the context kept %zu codes", filled);
+    CHECK(wrong == 0, "%zu kept codes are not their voxels'", wrong);
+    vs_context_release(c);
+    vs_volume_release(v);
+}
+
 int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 1;
@@ -286,6 +327,7 @@ int main(void)
     test_table();
     test_images_against_truth();
     test_kept_codes();
+    test_codes_kept();
     vs_context_release(ctx);
     TEST_DONE();
 }
