@@ -97,7 +97,9 @@ static int run_one(const char *target, const unsigned char *d, size_t n, const c
             CHECK(v == NULL && *vs_last_error(ctx), "%s: failed without a message or left a volume", what);
         }
     }
-    CHECK(tu_now_s() - t0 < 5.0 * tu_slack(), "%s: took %.1f s", what, tu_now_s() - t0);
+    /* a hang guard, not a speed test: the first image of a run also starts
+     * the OpenImageIO module, seen taking 8.5 s on a loaded 2-core machine */
+    CHECK(tu_now_s() - t0 < 30.0 * tu_slack(), "%s: took %.1f s", what, tu_now_s() - t0);
     unlink(path);
     return ok;
 }
