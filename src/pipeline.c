@@ -29,9 +29,9 @@ static const vs_stages post_gs[2] = {
      .classify = vs_classify_post_gs, .shade = vs_shade_post_exact},
 };
 /* with pre-integration between sheet k and k + 1 (post-gs and post-alpha
- * then keep sheet k + 1 too); one shading function serves tables and exact
- * normals */
-static const vs_stages post_cd_pi = {.ch = 1, .ahead = 1, .weights = vs_weights_density, .raster = vs_raster1,
+ * then keep sheet k + 1 too, post-cd sheet k + 2 for sheet k + 1's central
+ * difference); one shading function serves tables and exact normals */
+static const vs_stages post_cd_pi = {.ch = 1, .ahead = 2, .weights = vs_weights_density, .raster = vs_raster1,
                                      .activate = vs_activate_density, .classify = vs_classify_post_cd,
                                      .shade = vs_shade_post_preint};
 static const vs_stages post_gs_pi = {.ch = 4, .ahead = 1, .gradient_splats = 1, .weights = vs_weights_density,

@@ -133,7 +133,7 @@ void vs_tile_render(void *arg, int worker, int task)
      * neighbours central differences read), else sheet-at-a-time with three
      * buffers. */
     const int multi = F->use_blocks;
-    const int R = multi ? F->fp.vspan + 2 : 3;
+    const int R = multi ? F->fp.vspan + 1 + (st->ahead > 1 ? st->ahead : 1) : 2 + (st->ahead > 1 ? st->ahead : 1);
     const size_t sheet_floats = (size_t)ch * t.stride * t.bh;
     const size_t nblk = F->use_skewed   ? (size_t)F->skew_maxrows * 8 * F->skew_maxvec
                         : F->use_blocks ? (size_t)F->blk.ny * 8 * F->blk.nvec
@@ -234,7 +234,9 @@ void vs_tile_render(void *arg, int worker, int task)
         ts.kmin = kmin;
         ts.kmax = kmax;
     }
-    const int kbase = kmin - 1; /* slot of sheet k: (k - kbase) % R, never negative */
+    /* slot of sheet k: (k - kbase) % R, never negative from the first
+     * sheet the loop opens */
+    const int kbase = kmin - (st->ahead > 1 ? st->ahead : 1);
     const rect own = {1, 1, t.tw + 1, t.th + 1};
     int next_brick = 0;
 
@@ -293,7 +295,8 @@ void vs_tile_render(void *arg, int worker, int task)
                                         .nl = F->lut.nl, .lambda_bin = F->lut.lambda_bin, .radius = F->lut.radius,
                                         .phi_bin = F->lut.phi_bin, .diffuse = F->lut.diffuse,
                                         .specular = F->lut.specular};
-            const sheet_view sv = {.k = k, .q = ring[cur], .prev = ring[prev], .next = ring[nxt], .sp = &sp,
+            const sheet_view sv = {.k = k, .q = ring[cur], .prev = ring[prev], .next = ring[nxt],
+                                   .next2 = ahead > 1 ? ring[(k + 2 - kbase) % R] : NULL, .sp = &sp,
                                    .tabs = &tabs, .acc = acc};
             /* 1. classification + gradients */
             const double t0 = vs_now_ms();

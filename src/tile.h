@@ -160,6 +160,7 @@ typedef struct shade_buf {
 typedef struct sheet_view {
     int k;
     const float *q, *prev, *next;
+    const float *next2;  /* sheet k + 2 when the stages rasterize 2 ahead, else NULL */
     const spans *sp;
     const vs_shade_tabs *tabs;
     const float *acc;
@@ -171,7 +172,8 @@ typedef struct sheet_view {
 typedef struct vs_stages {
     int ch;              /* sheet-buffer channels: 1 (density) or 4        */
     int ahead;           /* sheets rasterized ahead of the one shaded (post-
-                            cd's central differences read sheet k + 1)      */
+                            cd's central differences read sheet k + 1, and
+                            pre-integrated, sheet k + 1's read k + 2)       */
     int gradient_splats; /* post-gs: sections carry the depth derivative's
                             integral E and mix density with its gradient   */
     int pre_shaded;      /* voxels are classified and shaded before splatting */

@@ -294,6 +294,59 @@ static void test_curved(void)
     vs_volume_release(v);
 }
 
+/* Real data: the engine CT with its shipped translucent preset
+ * (tools/tf/engine.1dt), 160^2, full resolution, against the exact-Gaussian
+ * ray caster.  Pre-integrated post-cd must beat plain sheets: each of the
+ * three gradients a pixel is lit by needs its depth difference centred
+ * where it is used (with sheet k + 1's one-sided and the middle's the mean
+ * of the ends, pre-integration came out 1.3 dB worse than plain sheets). */
+static void test_engine_preset(void)
+{
+    const char *dir = tu_data_dir();
+    const char *src = getenv("VSPLAT_SOURCE_DIR");
+    char path[4200], tfp[4200];
+    if (!dir) {
+        printf("SKIP engine preset: no data folder (VSPLAT_DATA or ../shared/data)\n");
+        return;
+    }
+    snprintf(path, sizeof path, "%s/openscivis_engine_ct_256x256x128_u8.nii.gz", dir);
+    snprintf(tfp, sizeof tfp, "%s/tools/tf/engine.1dt", src ? src : ".");
+    vs_volume *v = NULL;
+    if (vs_volume_load(ctx, path, NULL, &v) != VS_OK) {
+        printf("SKIP engine preset: %s\n", vs_last_error(ctx));
+        return;
+    }
+    vs_tf_point *tf = NULL;
+    int n = 0;
+    if (vs_tf_load_for_volume(ctx, tfp, v, &tf, &n) != VS_OK) {
+        CHECK(0, "engine.1dt: %s", vs_last_error(ctx));
+        vs_volume_release(v);
+        return;
+    }
+    vs_settings s = truth_settings(tf, n);
+    s.azimuth = 30;
+    s.elevation = 30;
+    s.lod_pixels = 0;
+    vs_image truth, pi, plain;
+    if (render(v, &s, &truth)) {
+        s.pipeline = VS_PIPELINE_POST_CD;
+        s.preintegration = 1;
+        const int a = render(v, &s, &pi);
+        s.preintegration = 0;
+        const int b = render(v, &s, &plain);
+        if (a && b) {
+            const double p1 = psnr_rgba(&pi, &truth), p0 = psnr_rgba(&plain, &truth);
+            printf("engine.1dt, post-cd vs exact-Gaussian ray caster: pre-integrated %.2f dB, plain %.2f dB\n", p1, p0);
+            CHECK(p1 >= p0 + 0.4, "pre-integrated %.2f dB, plain sheets %.2f dB", p1, p0);
+        }
+        if (a) vs_image_free(&pi);
+        if (b) vs_image_free(&plain);
+        vs_image_free(&truth);
+    }
+    vs_tf_free(tf);
+    vs_volume_release(v);
+}
+
 int main(void)
 {
     if (vs_context_create(&ctx) != VS_OK) return 2;
@@ -302,6 +355,7 @@ int main(void)
     test_post_alpha();
     test_shell();
     test_curved();
+    test_engine_preset();
     vs_context_release(ctx);
     TEST_DONE();
 }
