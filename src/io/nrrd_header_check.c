@@ -11,9 +11,12 @@
  *    (the string's buffer is leaked);
  *  - "labels", "units" or "space units" with another number of strings
  *    than the axes (or the space's dimensions) they describe: fewer leak
- *    the strings read before the missing one, more leak the extra one.
+ *    the strings read before the missing one, more leak the extra one;
+ *  - "labels", "units" or "space units" as the file's last line without a
+ *    newline: Teem may cut such a line short, and the string it cuts is
+ *    unterminated (leaked as above).
  * The header is the lines up to the first empty line (or the whole file,
- * for a detached .nhdr). */
+ * for a detached .nhdr), each ended by "\n", "\r\n" or "\r". */
 #include "nrrd_header_check.h"
 
 #include <ctype.h>
@@ -72,11 +75,14 @@ static const char *spelled(const char *name)
     return name;
 }
 
-static vs_status check_line(vs_context *ctx, const char *path, const char *line, int *dim, int *sdim)
+static vs_status check_line(vs_context *ctx, const char *path, const char *line, int last, int *dim, int *sdim)
 {
     char name[64];
     field_name(line, name, sizeof name);
     if (!*name) return VS_OK;
+    if (last && (!strcmp(name, "labels") || !strcmp(name, "units") || !strcmp(name, "spaceunits")))
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" on the last line without a newline", path,
+                            spelled(name));
     const char *info = strchr(line, ':') + 1;
     info += strspn(info, " \t");
     if (!strcmp(name, "dimension")) {
@@ -119,7 +125,15 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
     for (;;) {
         size_t n = 0;
         int c;
+        /* lines end at "\n", "\r\n" or a lone "\r", as Teem's airOneLine
+         * reads them */
         while ((c = getc(f)) != EOF && c != '\n') {
+            if (c == '\r') {
+                const int d = getc(f);
+                if (d != '\n' && d != EOF) ungetc(d, f);
+                c = '\n';
+                break;
+            }
             if (n == LINE_MAX_BYTES) {
                 st = vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD header line over %d bytes", path, LINE_MAX_BYTES);
                 break;
@@ -131,10 +145,9 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
             line[n++] = (char)c;
         }
         if (st != VS_OK) break;
-        if (n && line[n - 1] == '\r') n--;
         line[n] = '\0';
         if (n == 0 && c != EOF) break; /* end of the header */
-        if (!first) st = check_line(ctx, path, line, &dim, &sdim);
+        if (!first) st = check_line(ctx, path, line, c == EOF, &dim, &sdim);
         first = 0;
         if (st != VS_OK || c == EOF) break;
     }
