@@ -47,6 +47,7 @@ typedef struct vs_frame {
                                         per normal code (normal_code.h)       */
     _Atomic uint16_t *ncode;         /* and the voxels' codes plus one (0: not
                                         yet), or NULL: coded per voxel          */
+    float nscale[3];                 /* vs_normal_code_scale of vol            */
     vs_kernels kern;                 /* inner loops for the chosen ISA            */
     const vs_relevant_cache *rel;
     const struct vs_volume *vol;     /* what the voxels' values are read from   */

@@ -64,8 +64,7 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
     int pick = 0;
     for (int s = 0; s < VS_NORMAL_CODES_KEEP; s++) {
         vs_normal_codes *c = &slots[s];
-        if (c->code && c->vol == vol && c->data_serial == vol->data_serial && !memcmp(c->dims, vol->dims, sizeof c->dims) &&
-            !memcmp(c->spacing, vol->spacing, sizeof c->spacing)) {
+        if (c->code && vs_volume_stamp_same_voxels(&c->from, vol)) {
             c->used = now;
             return c->code;
         }
@@ -90,10 +89,7 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
     void *m = mmap(NULL, n * sizeof *c->code, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (m == MAP_FAILED) return NULL;
     c->code = m;
-    c->vol = vol;
-    c->data_serial = vol->data_serial;
-    memcpy(c->dims, vol->dims, sizeof c->dims);
-    memcpy(c->spacing, vol->spacing, sizeof c->spacing);
+    vs_volume_stamp_take(&c->from, vol);
     c->used = now;
     c->n = n;
     return c->code;

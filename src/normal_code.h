@@ -81,10 +81,7 @@ void vs_normal_table_free(vs_normal_table *tab);
 #define VS_NORMAL_CODES_ALL_BYTES (VS_NORMAL_CODES_MAX_BYTES + VS_NORMAL_CODES_MAX_BYTES / 4)
 _Static_assert(ATOMIC_SHORT_LOCK_FREE == 2, "kept codes are plain 16-bit stores and loads");
 typedef struct vs_normal_codes {
-    const struct vs_volume *vol; /* key: the volume, its data and spacing */
-    uint64_t data_serial;
-    int dims[3];
-    double spacing[3];
+    vs_volume_stamp from;        /* key: the volume, its voxels and spacing */
     uint64_t used;               /* when last used (least recently replaced) */
     _Atomic uint16_t *code;      /* [n]: code + 1, 0 while unknown; mapped
                                     anonymous memory, so untouched bricks
@@ -107,16 +104,22 @@ static inline uint32_t vs_normal_code_slot(const struct vs_volume *vol, int i0, 
            << (3 * VS_BRICK_BITS);
 }
 
-/* The code of voxel (i, j, k), linear index idx: its grid gradient over
- * the spacing, scaled by the finest spacing (the direction is the same, and
- * factors of at most 1 cannot overflow a finite gradient). */
-static inline int vs_voxel_normal_code(const struct vs_volume *vol, int i, int j, int k, size_t idx)
+/* What a voxel's grid gradient is multiplied by before coding: the
+ * spacing's inverse times the finest spacing (the same direction, and
+ * factors of at most 1 cannot overflow a finite gradient); once a frame. */
+static inline void vs_normal_code_scale(const struct vs_volume *vol, float sc[3])
+{
+    const double f = vs_volume_finest(vol);
+    for (int a = 0; a < 3; a++) sc[a] = (float)(f / vol->spacing[a]);
+}
+
+/* The code of voxel (i, j, k), linear index idx, with sc from
+ * vs_normal_code_scale. */
+static inline int vs_voxel_normal_code(const struct vs_volume *vol, const float sc[3], int i, int j, int k, size_t idx)
 {
     float g[3];
     vs_volume_grid_gradient(vol, i, j, k, idx, g);
-    const double f = vs_volume_finest(vol);
-    return vs_normal_code(g[0] * (float)(f / vol->spacing[0]), g[1] * (float)(f / vol->spacing[1]),
-                          g[2] * (float)(f / vol->spacing[2]));
+    return vs_normal_code(g[0] * sc[0], g[1] * sc[1], g[2] * sc[2]);
 }
 
 #endif

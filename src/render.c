@@ -394,7 +394,10 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     const double t_rel_end = vs_now_ms();
     double ms_relevant = rebuilt ? t_rel_end - t_rel : 0.0;
     F.vol = vol;
-    if (F.nterms) F.ncode = vs_normal_codes_get(ctx, vol);
+    if (F.nterms) {
+        F.ncode = vs_normal_codes_get(ctx, vol);
+        vs_normal_code_scale(vol, F.nscale);
+    }
     int nthreads = vs_pool_threads(ctx->pool);
     if (s->trace) {
         F.spans = calloc((size_t)nthreads, sizeof *F.spans);

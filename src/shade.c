@@ -92,7 +92,7 @@ static inline void voxel_light(const vs_frame *F, const pend *e, float *d, float
     const int i = (int)(v % (uint32_t)dims[0]), j = (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
               k = (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1]));
     if (F->nterms) {
-        const int c = vs_voxel_normal_code(F->vol, i, j, k, v);
+        const int c = vs_voxel_normal_code(F->vol, F->nscale, i, j, k, v);
         if (F->ncode) atomic_store_explicit(&F->ncode[e->c], (uint16_t)(c + 1), memory_order_relaxed);
         *d = F->nterms[c][0];
         *sp = F->nterms[c][1];

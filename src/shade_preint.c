@@ -114,6 +114,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             }
             float *e = B.e[B.n], *gk = B.g + 3 * B.per * B.n;
             vs_preint_halves(P, qf + base, m + base, qb + base, e);
+            for (int i = 0; i < 3; i++) gk[i] = g0[i];
             if (mix) {
                 float *gm = gk + 3, *g1 = gk + 6;
                 /* sheet k + 1's gradient: post-gs splatted it; post-cd takes
@@ -134,9 +135,6 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                     gm[1] = 0.5f * (g0[1] + g1[1]);
                     gm[2] = (qb - qf) / slab;
                 }
-                for (int i = 0; i < 3; i++) gk[i] = g0[i];
-            } else {
-                for (int i = 0; i < 3; i++) gk[i] = g0[i];
             }
             B.o[B.n++] = o;
             if (B.n == BATCH) flush(F, sv, &B, sb.g);

@@ -90,7 +90,7 @@ void vs_tile_render(void *arg, int worker, int task)
     vs_tile_scratch *scr = &F->scratch[worker];
     vs_span_buf *tr = F->spans ? &F->spans[worker] : NULL; /* tracing */
     if (atomic_load_explicit(&F->cancel, memory_order_relaxed)) return;
-    if (worker == 0 && s->progress) vs_tile_progress(F);
+    if (worker == 0) vs_tile_progress(F);
     task = F->tile_order[task];
     const int W = F->cam.width, T = F->tile;
     const int tx = task % F->tiles_x, ty = task / F->tiles_x;
@@ -133,7 +133,8 @@ void vs_tile_render(void *arg, int worker, int task)
      * neighbours central differences read), else sheet-at-a-time with three
      * buffers. */
     const int multi = F->use_blocks;
-    const int R = multi ? F->fp.vspan + 1 + (st->ahead > 1 ? st->ahead : 1) : 2 + (st->ahead > 1 ? st->ahead : 1);
+    const int lead = st->ahead > 1 ? st->ahead : 1; /* sheets the ring holds past the shaded one */
+    const int R = multi ? F->fp.vspan + 1 + lead : 2 + lead;
     const size_t sheet_floats = (size_t)ch * t.stride * t.bh;
     const size_t nblk = F->use_skewed   ? (size_t)F->skew_maxrows * 8 * F->skew_maxvec
                         : F->use_blocks ? (size_t)F->blk.ny * 8 * F->blk.nvec
@@ -236,7 +237,7 @@ void vs_tile_render(void *arg, int worker, int task)
     }
     /* slot of sheet k: (k - kbase) % R, never negative from the first
      * sheet the loop opens */
-    const int kbase = kmin - (st->ahead > 1 ? st->ahead : 1);
+    const int kbase = kmin - lead;
     const rect own = {1, 1, t.tw + 1, t.th + 1};
     int next_brick = 0;
 

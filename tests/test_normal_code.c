@@ -146,18 +146,13 @@ static void test_table(void)
     vs_normal_table_free(&tab);
 }
 
-static vs_image render_with(vs_context *c, const vs_volume *v, const vs_settings *s)
-{
-    vs_image img = {0, 0, NULL};
-    if (vs_render(c, v, s, &img, NULL) != VS_OK) CHECK(0, "render: %s", vs_last_error(c));
-    return img;
-}
+/* A render in a context of its own (tu_render checks it). */
 static vs_image render_fresh(const vs_volume *v, const vs_settings *s)
 {
     vs_context *c;
     vs_image img = {0, 0, NULL};
     if (vs_context_create(&c) != VS_OK) return img;
-    img = render_with(c, v, s);
+    img = tu_render(c, v, s, NULL);
     vs_context_release(c);
     return img;
 }
@@ -254,9 +249,9 @@ static void test_kept_codes(void)
             s.iso_opacity = 0.4f; /* translucent: the ramp's inside shows */
             s.threads = 2;
             vs_image fresh = render_fresh(v, &s);
-            vs_image a = render_with(kept, v, &s);
+            vs_image a = tu_render(kept, v, &s, NULL);
             s.threads = 1;
-            vs_image b = render_with(kept, v, &s);
+            vs_image b = tu_render(kept, v, &s, NULL);
             if (fresh.rgba && a.rgba && b.rgba) {
                 CHECK(tu_max_diff(&fresh, &a) == 0.0, "round %d %s: kept context, 2 threads, differs by %g", round,
                       vs_pipeline_name(s.pipeline), tu_max_diff(&fresh, &a));
@@ -296,10 +291,12 @@ static void test_codes_kept(void)
     vs_settings_init(&s);
     s.pipeline = VS_PIPELINE_POST_ALPHA;
     s.width = s.height = 96;
-    vs_image img = render_with(c, v, &s);
+    vs_image img = tu_render(c, v, &s, NULL);
     vs_image_free(&img);
     const _Atomic uint16_t *kept = vs_normal_codes_get(c, v);
     const int *d = v->dims;
+    float sc[3];
+    vs_normal_code_scale(v, sc);
     size_t filled = 0, wrong = 0;
     for (int k = 0; kept && k < d[2]; k++)
         for (int j = 0; j < d[1]; j++)
@@ -311,7 +308,7 @@ static void test_codes_kept(void)
                 if (!got) continue;
                 filled++;
                 const size_t idx = (size_t)i + (size_t)d[0] * ((size_t)j + (size_t)d[1] * (size_t)k);
-                wrong += got - 1 != (unsigned)vs_voxel_normal_code(v, i, j, k, idx);
+                wrong += got - 1 != (unsigned)vs_voxel_normal_code(v, sc, i, j, k, idx);
             }
     printf("kept codes after one frame: %zu voxels, %zu wrong\n", filled, wrong);
     CHECK(kept != NULL && filled > 1000, "the context kept %zu codes", filled);
