@@ -357,7 +357,7 @@ static inline void weights8_rgba(const float wv[4], float D, float E, const vs_f
  * (sheared_blocks) are tested once the same way, then each section is
  * placed at its own centre and added to its sheet (raster_skewed). */
 static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts, int opening, float *const *ring,
-                                                                  rect *bbs, int R, int kbase,
+                                                                  rect *bbs, int R, int kbase, const int ch,
                                                                   int (*splat_voxel)(const voxel_job *),
                                                                   void (*weights8)(const float *, float, float,
                                                                                    const vs_footprint *, float *))
@@ -369,7 +369,9 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
     const vs_frame *F = t->F;
     const vs_block_geom *g = F->sheared_blocks ? &F->skew : &F->blk;
     const vs_stages *st = F->stages;
-    const int ch = st->ch, ppv = 8 / ch, bs = 8 * g->nvec;
+    /* ch (the stages' channels) is each instance's constant: every voxel's
+     * block bounds are divided by 8 / ch, a shift rather than a division */
+    const int ppv = 8 / ch, bs = 8 * g->nvec;
     /* ring slots of the sheets from `opening` on: every voxel of this
      * bucket starts there (one division per sheet, not per section) */
     int slots[VS_MAX_VSPAN];
@@ -497,15 +499,15 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
 /* The pipelines' instances, each with its fused kernel inlined. */
 void vs_activate_density(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase)
 {
-    activate_sheet(ts, opening, ring, bbs, R, kbase, splat_density, weights8_density);
+    activate_sheet(ts, opening, ring, bbs, R, kbase, 1, splat_density, weights8_density);
 }
 
 void vs_activate_rgba(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase)
 {
-    activate_sheet(ts, opening, ring, bbs, R, kbase, splat_rgba, weights8_rgba);
+    activate_sheet(ts, opening, ring, bbs, R, kbase, 4, splat_rgba, weights8_rgba);
 }
 
 void vs_activate_gradient(tile_state *ts, int opening, float *const *ring, rect *bbs, int R, int kbase)
 {
-    activate_sheet(ts, opening, ring, bbs, R, kbase, splat_gradient, weights8_gradient);
+    activate_sheet(ts, opening, ring, bbs, R, kbase, 4, splat_gradient, weights8_gradient);
 }
