@@ -3,7 +3,8 @@
  * table's coordinate in double as the reference, truncation by cvtt, one
  * multiply and one add per element, IEEE division.  Tails go to the
  * scalar reference or to masked loads and stores (pixels are
- * independent). */
+ * independent).  A vector whose pixels all lie below the opacity table's
+ * zero run skips its look-ups and leaves its gradients alone (kernels.h). */
 #include "kernels.h"
 #include "tab_coord-avx2.h"
 
@@ -26,11 +27,10 @@ static inline void store3(float *p, __m256 x, __m256 y, __m256 z)
     _mm256_storeu_ps(p + 16, o2);
 }
 
-/* the opacity table at v (as lookup_alpha in scalar.c) */
-static inline __m256 lookup_alpha8(const vs_shade_tabs *T, __m256 v)
+/* the opacity table at coordinate x (as lookup_alpha in scalar.c) */
+static inline __m256 lookup_alpha_at8(const vs_shade_tabs *T, __m256 x)
 {
     const __m256 top_x = _mm256_set1_ps((float)(VS_KTAB - 1));
-    __m256 x = tab_coord8(v, _mm256_set1_pd(T->vmin), _mm256_set1_pd(T->scale));
     __m256 top = _mm256_cmp_ps(x, top_x, _CMP_GE_OQ);
     x = _mm256_andnot_ps(top, x); /* index 0 where the table's end is used */
     __m256i j = _mm256_cvttps_epi32(x);
@@ -46,25 +46,41 @@ static inline __m256i prefix8(int k)
     return _mm256_cmpgt_epi32(_mm256_set1_epi32(k), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
 }
 
+/* The opacity table at v (as lookup_alpha in scalar.c); *none set when
+ * every lane lies below the table's zero run, whose look-ups are skipped
+ * (most classified vectors of an opaque surface's sheets). */
+static inline __m256 classify_alpha8(const vs_shade_tabs *T, __m256 v, int *none)
+{
+    const __m256 x = tab_coord8(v, _mm256_set1_pd(T->vmin), _mm256_set1_pd(T->scale));
+    *none = _mm256_movemask_ps(_mm256_cmp_ps(x, _mm256_set1_ps(T->alpha_zero_x), _CMP_LT_OQ)) == 0xff;
+    return *none ? _mm256_setzero_ps() : lookup_alpha_at8(T, x);
+}
+
 /* 8 pixels, or the first m of them (masked loads and stores: no access
- * past the span) */
+ * past the span); without an opacity table the gradients only */
 static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                              int m, const vs_shade_tabs *T)
 {
     const __m256 half = _mm256_set1_ps(0.5f), two_slab = _mm256_set1_ps(T->two_slab);
     const __m256i in = prefix8(m);
 #define LD(p) (m == 8 ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in))
-    __m256 a = lookup_alpha8(T, LD(q));
+    if (T->alpha) {
+        int none;
+        const __m256 a = classify_alpha8(T, LD(q), &none);
+        if (m == 8)
+            _mm256_storeu_ps(alpha, a);
+        else
+            _mm256_maskstore_ps(alpha, in, a);
+        if (none) return; /* no gradient is read here */
+    }
     __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
     __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
     __m256 gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
 #undef LD
     if (m == 8) {
-        _mm256_storeu_ps(alpha, a);
         store3(g, gx, gy, gz);
     } else {
         float tmp[24];
-        _mm256_maskstore_ps(alpha, in, a);
         store3(tmp, gx, gy, gz);
         for (int k = 0; k < 3; k++) _mm256_maskstore_ps(g + 8 * k, prefix8(3 * m - 8 * k), _mm256_loadu_ps(tmp + 8 * k));
     }
@@ -95,7 +111,11 @@ void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const v
         __m256 gx = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t0, t2, 0xee), back);
         __m256 gy = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t1, t3, 0x44), back);
         __m256 gz = _mm256_permutevar8x32_ps(_mm256_shuffle_ps(t1, t3, 0xee), back);
-        _mm256_storeu_ps(alpha + i, lookup_alpha8(T, d));
+        if (T->alpha) {
+            int none;
+            _mm256_storeu_ps(alpha + i, classify_alpha8(T, d, &none));
+            if (none) continue;
+        }
         store3(g + 3 * i, _mm256_div_ps(gx, slab), _mm256_div_ps(gy, slab), _mm256_div_ps(gz, slab));
     }
     if (i < n) vs_classify_gs_scalar(alpha + i, g + 3 * i, q4 + 4 * i, n - i, T);

@@ -23,7 +23,10 @@
  * SIMD versions read them with 32-bit gathers and mask. */
 typedef struct vs_shade_tabs {
     double vmin, scale;     /* table coordinate x = (float)((v - vmin) * scale) */
-    const float *alpha;     /* [VS_KTAB]: opacity corrected for the slab      */
+    const float *alpha;     /* [VS_KTAB]: opacity corrected for the slab, or
+                               NULL: classify the gradients only           */
+    float alpha_zero_x;     /* the opacity table reads 0 below this x
+                               (vs_alpha_zero_x)                           */
     const float *color;     /* [VS_KTAB][3]                                   */
     float slab, two_slab;   /* slab thickness (post-gs gradients), and twice it
                                (divisor of the z central difference)        */
@@ -68,6 +71,16 @@ static inline float vs_preint_bilerp(const vs_preint_tabs *P, size_t idx, float 
 
 /* Entries of the classification tables (VS_TF_TABLE in classify.h). */
 #define VS_KTAB 4096
+
+/* The table coordinate below which the linearly interpolated opacity
+ * table t[VS_KTAB] reads exactly 0: x < i - 1 interpolates two zero
+ * entries when t[0..i-1] are 0.  Classification skips its look-ups there. */
+static inline float vs_alpha_zero_x(const float *t)
+{
+    int i = 0;
+    while (i < VS_KTAB && t[i] == 0.0f) i++;
+    return i == VS_KTAB ? (float)VS_KTAB : (float)(i - 1);
+}
 
 /* What project_brick needs: the view position of a brick's corner voxel,
  * the view matrix, and the box a voxel centre must reach to be kept (a
@@ -152,14 +165,17 @@ typedef struct vs_kernels {
                             const float m[12]);
     /* post-cd step 1 over one span of a density sheet q (neighbour rows at
      * +-stride, sheets before/after qp, qn): alpha[i] = opacity table at
-     * q[i] (linear interpolation), and for EVERY i (read only where
-     * alpha > 0) the central-difference gradient
-     *   g[3i..3i+2] = 0.5 (q[i+1] - q[i-1]), 0.5 (q[i+s] - q[i-s]), (qn[i] - qp[i]) / two_slab */
+     * q[i] (linear interpolation), and the central-difference gradient
+     *   g[3i..3i+2] = 0.5 (q[i+1] - q[i-1]), 0.5 (q[i+s] - q[i-s]), (qn[i] - qp[i]) / two_slab
+     * at least where alpha[i] > 0: a kernel may leave g alone on a run of
+     * pixels that are all transparent.  With T->alpha NULL (pre-integration
+     * classifies the segment instead), alpha is left alone and g is written
+     * for every i. */
     void (*classify_cd)(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
                         int n, const vs_shade_tabs *T);
     /* post-gs step 1 over one span of a sheet of (density, three gradient
-     * splats) per pixel: alpha[i] = opacity table at q4[4i], and for EVERY i
-     * g[3i + c] = q4[4i + 1 + c] / slab */
+     * splats) per pixel: alpha[i] = opacity table at q4[4i], and
+     * g[3i + c] = q4[4i + 1 + c] / slab where classify_cd writes it */
     void (*classify_gs)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
     /* step 2 (post-cd, post-gs) where alpha[i] > 0: the gradient g[3i..]
      * shaded through the normal LUT (vs_shade_lut_eval) times the colour

@@ -75,7 +75,7 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
                            ptrdiff_t stride, int n, const vs_shade_tabs *T)
 {
     for (int i = 0; i < n; i++) {
-        alpha[i] = lookup_alpha(T, q[i]);
+        if (T->alpha) alpha[i] = lookup_alpha(T, q[i]);
         g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
         g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
         g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
@@ -85,7 +85,7 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
 void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
 {
     for (int i = 0; i < n; i++) {
-        alpha[i] = lookup_alpha(T, q4[4 * i]);
+        if (T->alpha) alpha[i] = lookup_alpha(T, q4[4 * i]);
         g[3 * i + 0] = q4[4 * i + 1] / T->slab;
         g[3 * i + 1] = q4[4 * i + 2] / T->slab;
         g[3 * i + 2] = q4[4 * i + 3] / T->slab;

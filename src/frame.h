@@ -52,6 +52,7 @@ typedef struct vs_frame {
     const vs_relevant_cache *rel;
     const struct vs_volume *vol;     /* what the voxels' values are read from   */
     float alpha_corr[VS_TF_TABLE];   /* classification opacity corrected for the slab */
+    float alpha_zero_x;              /* alpha_corr reads 0 below this coordinate */
     float opacity_corr[1025];        /* 1-(1-a)^slab over a in [0,1] (pre-shaded)      */
     const struct vs_preint *preint;  /* pre-integrated classification between
                                         sheets (post-cd, -gs, -alpha), or NULL  */

@@ -338,6 +338,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     const double slab_len = s->slab * (vs_volume_finest(vol) / vs_volume_finest(full));
     for (int i = 0; i < VS_TF_TABLE; i++)
         F.alpha_corr[i] = (float)vs_opacity_correct(F.cls->alpha[i], slab_len);
+    F.alpha_zero_x = vs_alpha_zero_x(F.alpha_corr);
     for (int i = 0; i <= 1024; i++) F.opacity_corr[i] = (float)vs_opacity_correct(i / 1024.0, slab_len);
 
     /* relevant voxels: pre-shaded splatting needs only the in-range voxels;

@@ -290,7 +290,10 @@ void vs_tile_render(void *arg, int worker, int task)
             spans sp = {.xa = span_xa, .xb = span_xb};
             vs_shaded_spans(&r, live0, live1, &sp);
             /* the tables the post-shaded kernels read (a few stores a sheet) */
-            const vs_shade_tabs tabs = {.vmin = F->cls->vmin - F->base, .scale = F->cls->scale, .alpha = F->alpha_corr,
+            /* pre-integration classifies the segment (sheet_classify.c):
+             * the kernels then take the gradients only */
+            const vs_shade_tabs tabs = {.vmin = F->cls->vmin - F->base, .scale = F->cls->scale,
+                                        .alpha = F->preint ? NULL : F->alpha_corr, .alpha_zero_x = F->alpha_zero_x,
                                         .color = &F->cls->color[0][0], .slab = slab, .two_slab = 2.0f * slab,
                                         .ppm = (float)F->cam.px_per_mm, .zpm = (float)F->cam.z_per_mm,
                                         .nl = F->lut.nl, .lambda_bin = F->lut.lambda_bin, .radius = F->lut.radius,

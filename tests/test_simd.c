@@ -136,6 +136,7 @@ static void block_mix_off(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t 
 enum { NL = 64, NP = NL / 2 + 1 };
 typedef struct shade_fixture {
     float alpha[VS_KTAB], color[3 * VS_KTAB], diffuse[NP * NL], specular[NP * NL];
+    float zalpha[VS_KTAB]; /* 0 on the table's lower half, as an iso-surface's */
     uint16_t lambda_bin[255 * 255 + 2], phi_bin[255 * 181 + 2];
     uint8_t radius[255 * 255 + 4];
     vs_shade_tabs T;
@@ -168,6 +169,37 @@ static void fixture_init(shade_fixture *F)
                            .slab = 0.375f, .two_slab = 0.75f, .ppm = 1.3f, .zpm = 0.9f, .nl = NL,
                            .lambda_bin = F->lambda_bin, .radius = F->radius, .phi_bin = F->phi_bin,
                            .diffuse = F->diffuse, .specular = F->specular};
+    F->T.alpha_zero_x = vs_alpha_zero_x(F->alpha);
+    for (int i = 0; i < VS_KTAB; i++) F->zalpha[i] = i < VS_KTAB / 2 ? 0.0f : F->alpha[i];
+}
+
+/* The classification tables of variant var: 0 the fixture's, 1 a zero
+ * lower half (whole vectors of transparent pixels), 2 gradients only. */
+static vs_shade_tabs classify_tabs(const shade_fixture *F, int var)
+{
+    vs_shade_tabs T = F->T;
+    if (var == 1) {
+        T.alpha = F->zalpha;
+        T.alpha_zero_x = vs_alpha_zero_x(F->zalpha);
+    }
+    if (var == 2) T.alpha = NULL;
+    return T;
+}
+
+/* Gradients out of a classification kernel against the reference's: the
+ * same bits where the reference's opacity ar is positive (everywhere with
+ * `all`), else the same bits or left as they were (g0); outside the span
+ * [off, off + n) left as they were. */
+static int gradients_agree(const float *gr, const float *go, const float *g0, const float *ar, int off, int n,
+                           int npix, int all)
+{
+    for (int i = 0; i < npix; i++) {
+        const int in = i >= off && i < off + n;
+        const size_t b = 3 * sizeof(float);
+        const int same = memcmp(gr + 3 * i, go + 3 * i, b) == 0, kept = memcmp(g0 + 3 * i, go + 3 * i, b) == 0;
+        if (!in ? !kept : (all || ar[i] > 0.0f) ? !same : !(same || kept)) return 0;
+    }
+    return 1;
 }
 
 /* a density: mostly inside the table, plus its ends, beyond them, NaN, +-Inf */
@@ -186,6 +218,15 @@ static float density(void)
     case 8: return 9.998f; /* x = 4094.6: the last interpolated interval */
     default: return frand() * 11.0f;
     }
+}
+
+/* a density mostly under the zero half of the fixture's zalpha (x below
+ * 1740), so that whole vectors are transparent, sometimes above it or
+ * NaN, Inf */
+static float low_density(void)
+{
+    rng_state = rng_state * 1664525u + 1013904223u;
+    return (rng_state >> 24) % 16 == 0 ? density() : -6.0f + 4.5f * frand();
 }
 
 /* a gradient component: random, zero, tiny, huge, NaN, Inf */
@@ -208,29 +249,33 @@ static float gcomp(void)
  * outputs' guard floats must not change */
 static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fixture *F)
 {
-    enum { S = MAXN + 2 * PAD };
+    enum { S = MAXN + 2 * PAD, NPIX = MAXN + PAD };
     float q[3 * S], qp[3 * S], qn[3 * S];
-    float ar[MAXN + PAD], ao[MAXN + PAD], gr[3 * (MAXN + PAD)], go[3 * (MAXN + PAD)];
+    float ar[NPIX], ao[NPIX], gr[3 * NPIX], go[3 * NPIX], g0[3 * NPIX];
     int cases = 0;
     for (int n = 0; n <= MAXN; n++)
         for (int off = 0; off < 4; off++)
-            for (int rep = 0; rep < 4; rep++) {
-                for (int i = 0; i < 3 * S; i++) {
-                    q[i] = density();
-                    qp[i] = rep == 1 ? q[i] : density(); /* rep 1: zero z gradient */
-                    qn[i] = density();
+            for (int rep = 0; rep < 4; rep++)
+                for (int var = 0; var < 3; var++) {
+                    const vs_shade_tabs T = classify_tabs(F, var);
+                    for (int i = 0; i < 3 * S; i++) {
+                        q[i] = var == 1 ? low_density() : density();
+                        qp[i] = rep == 1 ? q[i] : density(); /* rep 1: zero z gradient */
+                        qn[i] = density();
+                    }
+                    for (int i = 0; i < NPIX; i++) ar[i] = ao[i] = frand();
+                    for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
+                    const int b = S + PAD / 2 + off; /* middle row, unaligned */
+                    vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, S, n, &T);
+                    fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, S, n, &T);
+                    if (memcmp(ar, ao, sizeof ar) != 0 || !gradients_agree(gr, go, g0, ar, off, n, NPIX, var == 2)) {
+                        if (isa)
+                            CHECK(0, "classify_cd %s differs from scalar at n=%d offset=%d rep %d tables %d", isa, n,
+                                  off, rep, var);
+                        return 0;
+                    }
+                    cases++;
                 }
-                for (int i = 0; i < MAXN + PAD; i++) ar[i] = ao[i] = frand();
-                for (int i = 0; i < 3 * (MAXN + PAD); i++) gr[i] = go[i] = frand();
-                const int b = S + PAD / 2 + off; /* middle row, unaligned */
-                vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, S, n, &F->T);
-                fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, S, n, &F->T);
-                if (memcmp(ar, ao, sizeof ar) != 0 || memcmp(gr, go, sizeof gr) != 0) {
-                    if (isa) CHECK(0, "classify_cd %s differs from scalar at n=%d offset=%d rep %d", isa, n, off, rep);
-                    return 0;
-                }
-                cases++;
-            }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_cd", isa, cases);
     return 1;
 }
@@ -239,25 +284,30 @@ static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fix
  * above, gradient splats with zeros, NaN and Inf */
 static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_fixture *F)
 {
-    float q4[4 * (MAXN + PAD)], ar[MAXN + PAD], ao[MAXN + PAD], gr[3 * (MAXN + PAD)], go[3 * (MAXN + PAD)];
+    enum { NPIX = MAXN + PAD };
+    float q4[4 * NPIX], ar[NPIX], ao[NPIX], gr[3 * NPIX], go[3 * NPIX], g0[3 * NPIX];
     int cases = 0;
     for (int n = 0; n <= MAXN; n++)
         for (int off = 0; off < 4; off++)
-            for (int rep = 0; rep < 2; rep++) {
-                for (int i = 0; i < MAXN + PAD; i++) {
-                    q4[4 * i] = density();
-                    for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
-                    ar[i] = ao[i] = frand();
+            for (int rep = 0; rep < 2; rep++)
+                for (int var = 0; var < 3; var++) {
+                    const vs_shade_tabs T = classify_tabs(F, var);
+                    for (int i = 0; i < NPIX; i++) {
+                        q4[4 * i] = var == 1 ? low_density() : density();
+                        for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
+                        ar[i] = ao[i] = frand();
+                    }
+                    for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
+                    vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &T);
+                    fn(ao + off, go + 3 * off, q4 + 4 * off, n, &T);
+                    if (memcmp(ar, ao, sizeof ar) != 0 || !gradients_agree(gr, go, g0, ar, off, n, NPIX, var == 2)) {
+                        if (isa)
+                            CHECK(0, "classify_gs %s differs from scalar at n=%d offset=%d rep %d tables %d", isa, n,
+                                  off, rep, var);
+                        return 0;
+                    }
+                    cases++;
                 }
-                for (int i = 0; i < 3 * (MAXN + PAD); i++) gr[i] = go[i] = frand();
-                vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &F->T);
-                fn(ao + off, go + 3 * off, q4 + 4 * off, n, &F->T);
-                if (memcmp(ar, ao, sizeof ar) != 0 || memcmp(gr, go, sizeof gr) != 0) {
-                    if (isa) CHECK(0, "classify_gs %s differs from scalar at n=%d offset=%d rep %d", isa, n, off, rep);
-                    return 0;
-                }
-                cases++;
-            }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_gs", isa, cases);
     return 1;
 }
