@@ -186,20 +186,25 @@ static vs_shade_tabs classify_tabs(const shade_fixture *F, int var)
     return T;
 }
 
-/* Gradients out of a classification kernel against the reference's: the
- * same bits where the reference's opacity ar is positive (everywhere with
- * `all`), else the same bits or left as they were (g0); outside the span
- * [off, off + n) left as they were. */
-static int gradients_agree(const float *gr, const float *go, const float *g0, const float *ar, int off, int n,
-                           int npix, int all)
+/* A classification kernel's outputs (ao, go) against the reference's
+ * (ar, gr) over npix pixels, the span [off, off + n) written: the same
+ * opacities bit for bit; gradients the same bits where ar is positive
+ * (everywhere with `all`: no opacity table), else the same bits or left as
+ * they were (g0), and left as they were outside the span.  Reports the
+ * case (kernel name, isa, n, off, rep, tables var) unless isa is NULL. */
+static int classified_agree(const char *name, const char *isa, const float *ar, const float *ao, const float *gr,
+                            const float *go, const float *g0, int npix, int off, int n, int rep, int var)
 {
-    for (int i = 0; i < npix; i++) {
+    int ok = memcmp(ar, ao, (size_t)npix * sizeof *ar) == 0;
+    for (int i = 0; ok && i < npix; i++) {
         const int in = i >= off && i < off + n;
         const size_t b = 3 * sizeof(float);
         const int same = memcmp(gr + 3 * i, go + 3 * i, b) == 0, kept = memcmp(g0 + 3 * i, go + 3 * i, b) == 0;
-        if (!in ? !kept : (all || ar[i] > 0.0f) ? !same : !(same || kept)) return 0;
+        ok = !in ? kept : (var == 2 || ar[i] > 0.0f) ? same : same || kept;
     }
-    return 1;
+    if (!ok && isa)
+        CHECK(0, "%s %s differs from scalar at n=%d offset=%d rep %d tables %d", name, isa, n, off, rep, var);
+    return ok;
 }
 
 /* a density: mostly inside the table, plus its ends, beyond them, NaN, +-Inf */
@@ -268,12 +273,7 @@ static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fix
                     const int b = S + PAD / 2 + off; /* middle row, unaligned */
                     vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, S, n, &T);
                     fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, S, n, &T);
-                    if (memcmp(ar, ao, sizeof ar) != 0 || !gradients_agree(gr, go, g0, ar, off, n, NPIX, var == 2)) {
-                        if (isa)
-                            CHECK(0, "classify_cd %s differs from scalar at n=%d offset=%d rep %d tables %d", isa, n,
-                                  off, rep, var);
-                        return 0;
-                    }
+                    if (!classified_agree("classify_cd", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
                     cases++;
                 }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_cd", isa, cases);
@@ -300,12 +300,7 @@ static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_
                     for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
                     vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &T);
                     fn(ao + off, go + 3 * off, q4 + 4 * off, n, &T);
-                    if (memcmp(ar, ao, sizeof ar) != 0 || !gradients_agree(gr, go, g0, ar, off, n, NPIX, var == 2)) {
-                        if (isa)
-                            CHECK(0, "classify_gs %s differs from scalar at n=%d offset=%d rep %d tables %d", isa, n,
-                                  off, rep, var);
-                        return 0;
-                    }
+                    if (!classified_agree("classify_gs", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
                     cases++;
                 }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_gs", isa, cases);
