@@ -10,6 +10,7 @@
 #include "light.h"
 #include "relevant.h"
 #include "volume.h"
+#include "voxel_gradient.h"
 
 #include <float.h>
 #include <stdatomic.h>
@@ -104,7 +105,7 @@ static inline uint32_t vs_normal_code_slot(const struct vs_volume *vol, int i0, 
            << (3 * VS_BRICK_BITS);
 }
 
-/* What a voxel's grid gradient is multiplied by before coding: the
+/* What a voxel's gradient (voxel_gradient.h) is multiplied by before coding: the
  * spacing's inverse times the finest spacing (the same direction, and
  * factors of at most 1 cannot overflow a finite gradient); once a frame. */
 static inline void vs_normal_code_scale(const struct vs_volume *vol, float sc[3])
@@ -118,7 +119,7 @@ static inline void vs_normal_code_scale(const struct vs_volume *vol, float sc[3]
 static inline int vs_voxel_normal_code(const struct vs_volume *vol, const float sc[3], int i, int j, int k, size_t idx)
 {
     float g[3];
-    vs_volume_grid_gradient(vol, i, j, k, idx, g);
+    vs_voxel_gradient(vol, i, j, k, idx, g);
     return vs_normal_code(g[0] * sc[0], g[1] * sc[1], g[2] * sc[2]);
 }
 

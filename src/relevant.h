@@ -12,7 +12,7 @@
  * project, bin and cull whole bricks before touching their voxels.  A voxel
  * is only its position in the brick, di | dj << 3 | dk << 6 (2 bytes, not
  * the 12 of position plus value): a frame reads the value, and the
- * pre-shaded pipelines the grid gradient, from the volume, and only for the
+ * pre-shaded pipelines the gradient, from the volume, and only for the
  * voxels that survive culling. */
 #define VS_RELEVANT_KEEP_SCRATCH ((size_t)256 << 20)
 #define VS_BRICK_BITS 3

@@ -1,5 +1,6 @@
 /* Shading: voxels before splatting (pre: classified colour times the
- * Phong terms of the grid gradient; post-alpha: those terms alone) and
+ * Phong terms of the reconstruction's gradient at the voxel,
+ * voxel_gradient.h; post-alpha: those terms alone) and
  * sheet pixels after classification (post-shaded: the Phong terms of the
  * sheet's gradient, by the Clyne-Dennis tables or exact, times the colour
  * table, or with pre-integration shade_preint.c's; pre: the splatted colour
@@ -59,7 +60,7 @@ static inline void shade_gradient(const vs_frame *F, float gx, float gy, float g
 
 /* Splat weights of the voxels p[lane], lane in the mask `live` (at most
  * VS_PLACE_BATCH), from their linear index in the volume: density (post),
- * or classified colour times the Phong terms of its grid gradient
+ * or classified colour times the Phong terms of its gradient
  * (pre-shading: once per voxel and view). */
 void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w[][4])
 {
@@ -75,8 +76,8 @@ void vs_weights_density(const vs_frame *F, const pend *p, unsigned live, float w
  * the view's terms of its normal code, which a context keeps per voxel
  * once the first frame that splats the voxel has computed it (codes are
  * stored plus one, 0 meaning not yet; every thread computes the same code,
- * so a race only repeats the work); exact normals: the grid gradient
- * rotated into the eye frame and the light evaluated. */
+ * so a race only repeats the work); exact normals: the voxel's gradient
+ * (voxel_gradient.h) rotated into the eye frame and the light evaluated. */
 static inline void voxel_light(const vs_frame *F, const pend *e, float *d, float *sp)
 {
     const uint32_t v = e->v;
@@ -100,7 +101,7 @@ static inline void voxel_light(const vs_frame *F, const pend *e, float *d, float
     }
     const vs_camera *cam = &F->cam;
     float g[3];
-    vs_volume_grid_gradient(F->vol, i, j, k, v, g);
+    vs_voxel_gradient(F->vol, i, j, k, v, g);
     double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
     double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
                    -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),

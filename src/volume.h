@@ -76,26 +76,6 @@ static inline double vs_volume_finest(const struct vs_volume *v)
         if (v->spacing[a] < m) m = v->spacing[a];
     return m;
 }
-/* Central-difference gradient on the grid at voxel (i, j, k), linear index
- * idx, in index units (one-sided at the borders; non-finite results 0):
- * what the pre-shaded pipelines shade a voxel by. */
-static inline void vs_volume_grid_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3])
-{
-    const int p[3] = {i, j, k};
-    const int *d = v->dims;
-    const size_t st[3] = {1, (size_t)d[0], (size_t)d[0] * d[1]};
-    for (int a = 0; a < 3; a++) {
-        int lo = p[a] > 0 ? 1 : 0, hi = p[a] < d[a] - 1 ? 1 : 0;
-        double gr = 0.0;
-        if (lo + hi > 0) {
-            double fh = vs_volume_at(v, idx + hi * st[a]);
-            double fl = vs_volume_at(v, idx - lo * st[a]);
-            gr = (fh - fl) / (lo + hi);
-            if (!isfinite(gr)) gr = 0.0;
-        }
-        g[a] = (float)gr;
-    }
-}
 /* Set the index-to-world (RAS, mm) transform from a loader; the spacing
  * becomes its column norms.  VS_ERR_INVALID_ARGUMENT (volume unchanged) if a
  * column is zero, not finite or the matrix is singular. */

@@ -17,13 +17,7 @@ static vs_context *ctx;
 
 /* xorshift: the same directions every run */
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
-static double urand(void)
-{
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (double)(rng >> 11) / 9007199254740992.0;
-}
+static double urand(void) { return tu_urand(&rng); }
 static void random_dir(double w[3])
 {
     double m;

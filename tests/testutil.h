@@ -6,6 +6,7 @@
 #include "vsplat.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,17 @@ static inline const char *tu_data_dir(void)
     snprintf(buf, sizeof buf, "%s/../shared/data", src);
     if (stat(buf, &st) == 0) return buf;
     return NULL;
+}
+
+/* xorshift64 on *state: the same sequence every run, uniform in [0, 1) */
+static inline double tu_urand(uint64_t *state)
+{
+    uint64_t x = *state;
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    *state = x;
+    return (double)(x >> 11) / 9007199254740992.0;
 }
 
 /* Largest absolute difference of two images of the same size, over every

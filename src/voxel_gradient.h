@@ -1,0 +1,19 @@
+/* The gradient a pre-shaded voxel is lit by (pre, post-alpha): that of the
+ * field splatting reconstructs, at the voxel's centre. */
+#ifndef VS_VOXEL_GRADIENT_H
+#define VS_VOXEL_GRADIENT_H
+
+#include <stddef.h>
+
+struct vs_volume;
+
+/* The gradient at voxel (i, j, k), linear index idx, of the sum of the
+ * kernel 2^(-2 r^2) over the voxels, what lies outside the volume and
+ * non-finite voxels reading as vs_volume_base, in index units, halved
+ * (so data spanning +-FLT_MAX stays finite) and up to the kernel's
+ * constant factor: the direction the exact-Gaussian ray caster samples
+ * there (src/raycast.c).  The 32 neighbours within 2 voxels;
+ * farther ones weigh 2^-10 of the nearest or less. */
+void vs_voxel_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3]);
+
+#endif
