@@ -184,8 +184,10 @@ static void test_shell(void)
     vs_volume_release(v);
 }
 
-/* Post-alpha splats the light opacity-weighted and normalises it: within a
- * few dB of post-cd against the ray caster, translucent and opaque. */
+/* Post-alpha splats the light opacity-weighted and normalises it: within
+ * 2 dB of post-cd against the ray caster, translucent and opaque
+ * (measured 0.3 dB under and level; test_splat checks the same on
+ * Marschner-Lobb, whose gradients are not radial). */
 static void test_post_alpha(void)
 {
     vs_volume *v = tu_scene(ctx, "sphere:48");
@@ -216,7 +218,7 @@ static void test_post_alpha(void)
         if (ok) {
             double dcd = psnr_rgba(&truth, &cd), dpa = psnr_rgba(&truth, &pa);
             printf("%s sphere: post-cd %.2f dB, post-alpha %.2f dB\n", translucent ? "shell" : "opaque", dcd, dpa);
-            CHECK(dpa >= dcd - 8.0, "post-alpha %.2f dB more than 8 dB under post-cd %.2f dB", dpa, dcd);
+            CHECK(dpa >= dcd - 2.0, "post-alpha %.2f dB more than 2 dB under post-cd %.2f dB", dpa, dcd);
             vs_image_free(&cd);
             vs_image_free(&pa);
         } else {
