@@ -200,7 +200,7 @@ int bench_error(const bench_opts *o)
             vs_volume_release(vol);
             return 2;
         }
-        /* post-alpha first: its relevant-voxel list (with grid gradients) serves post-cd and post-gs too */
+        /* post-alpha first: its relevant-voxel list (with voxel gradients) serves post-cd and post-gs too */
         static const vs_pipeline order[4] = {VS_PIPELINE_POST_ALPHA, VS_PIPELINE_PRE, VS_PIPELINE_POST_CD,
                                              VS_PIPELINE_POST_GS};
         for (int p = 0; p < 4; p++)

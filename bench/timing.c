@@ -5,7 +5,7 @@
  * (same volume, classification and pipeline family) and the same worker pool
  * (threads, pinning), so interleaving configurations never rebuilds the list
  * or the pool inside a timed run.  Pre-shaded splatting keeps a list without
- * the seam layer; post-alpha's list (seam + grid gradients) also serves
+ * the seam layer; post-alpha's list (seam + voxel gradients) also serves
  * post-cd and post-gs; the ray caster keeps no list. */
 #include "bench.h"
 

@@ -67,9 +67,10 @@ void vs_normal_table_free(vs_normal_table *tab);
 
 /* Every voxel's code, kept in the context for the last few volumes and
  * filled in as frames splat the voxels (shade.c): a voxel's gradient then
- * costs a later frame one 2-byte load instead of six value loads and a
- * division.  The codes depend on the values and the spacing alone, so a
- * new classification or view keeps them.  They are stored brick by brick
+ * costs a later frame one 2-byte load instead of 32 value loads.  The
+ * codes depend on the values, the spacing and the value outside the volume
+ * (which the declared range sets) alone, so a new classification or view
+ * keeps them.  They are stored brick by brick
  * (the relevant-voxel bricks, VS_BRICK^3 voxels each, in brick-grid order;
  * inside a brick by a voxel's vs_voxel position), so that only the bricks
  * a frame splats take memory: the array is zero pages until written.
@@ -83,6 +84,8 @@ void vs_normal_table_free(vs_normal_table *tab);
 _Static_assert(ATOMIC_SHORT_LOCK_FREE == 2, "kept codes are plain 16-bit stores and loads");
 typedef struct vs_normal_codes {
     vs_volume_stamp from;        /* key: the volume, its voxels and spacing */
+    double base;                 /* and its outside value (vs_volume_base),
+                                    which voxels near a face read        */
     uint64_t used;               /* when last used (least recently replaced) */
     _Atomic uint16_t *code;      /* [n]: code + 1, 0 while unknown; mapped
                                     anonymous memory, so untouched bricks

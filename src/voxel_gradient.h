@@ -12,8 +12,11 @@ struct vs_volume;
  * non-finite voxels reading as vs_volume_base, in index units, halved
  * (so data spanning +-FLT_MAX stays finite) and up to the kernel's
  * constant factor: the direction the exact-Gaussian ray caster samples
- * there (src/raycast.c).  The 32 neighbours within 2 voxels;
- * farther ones weigh 2^-10 of the nearest or less. */
+ * there (src/raycast.c).  The 32 neighbours within 2 voxels: the default
+ * kernel's (--kernel-radius 2) reach, used for every radius (farther
+ * neighbours weigh 2^-8 of a face neighbour or less; a radius under 2 does
+ * not reach the diagonal ones, which still tilt the normal only as the
+ * field's smoothing would). */
 void vs_voxel_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3]);
 
 #endif

@@ -269,6 +269,59 @@ static void test_kept_codes(void)
     vs_volume_release(v);
 }
 
+/* The value outside the volume is part of a voxel's gradient near a face
+ * (src/voxel_gradient.h), and a declared range sets it: after
+ * vs_volume_set_range a context that kept the codes must render what a
+ * fresh one renders.  An i16 ball that runs into the faces, in air of
+ * -1000 (outside value -1000), then declared 0..1000 (outside value 0). */
+static void test_codes_follow_range(void)
+{
+    const int dims[3] = {32, 32, 32};
+    vs_volume *v = NULL;
+    if (vs_volume_create(ctx, VS_I16, dims, NULL, &v) != VS_OK) {
+        CHECK(0, "create: %s", vs_last_error(ctx));
+        return;
+    }
+    int16_t *f = vs_volume_data(v);
+    for (int k = 0; k < 32; k++)
+        for (int j = 0; j < 32; j++)
+            for (int i = 0; i < 32; i++) {
+                const double r = sqrt((i - 15.5) * (i - 15.5) + (j - 15.5) * (j - 15.5) + (k - 15.5) * (k - 15.5));
+                f[i + 32 * (j + 32 * k)] = (int16_t)(r < 18.0 ? 400 + 10 * i : -1000);
+            }
+    vs_volume_update_range(v);
+    vs_context *kept;
+    if (vs_context_create(&kept) != VS_OK) {
+        vs_volume_release(v);
+        return;
+    }
+    vs_settings s;
+    vs_settings_init(&s);
+    s.pipeline = VS_PIPELINE_PRE;
+    s.width = s.height = 64;
+    s.azimuth = 35;
+    s.elevation = 25;
+    s.has_iso = 1;
+    s.iso_lo = 300;
+    s.iso_hi = 1000;
+    s.ramp = 40;
+    vs_image before = tu_render(kept, v, &s, NULL);
+    CHECK(vs_volume_set_range(v, 0.0, 1000.0) == VS_OK, "set_range");
+    vs_image a = tu_render(kept, v, &s, NULL), fresh = render_fresh(v, &s);
+    if (before.rgba && a.rgba && fresh.rgba) {
+        printf("codes after a new range: kept vs fresh %g, before vs after %g\n", tu_max_diff(&a, &fresh),
+               tu_max_diff(&before, &fresh));
+        CHECK(tu_max_diff(&a, &fresh) == 0.0, "after a new range the kept codes differ by %g", tu_max_diff(&a, &fresh));
+        CHECK(tu_max_diff(&before, &fresh) > 1e-3, "the new range changed nothing (%g): the test shows nothing",
+              tu_max_diff(&before, &fresh));
+    }
+    vs_image_free(&before);
+    vs_image_free(&a);
+    vs_image_free(&fresh);
+    vs_context_release(kept);
+    vs_volume_release(v);
+}
+
 /* The codes are kept: after a frame, the context's array for the volume
  * holds codes, each that of its voxel (a brick's slot is
  * vs_normal_code_slot of its lowest voxel, plus the voxel's place in it). */
@@ -318,6 +371,7 @@ int main(void)
     test_table();
     test_images_against_truth();
     test_kept_codes();
+    test_codes_follow_range();
     test_codes_kept();
     vs_context_release(ctx);
     TEST_DONE();

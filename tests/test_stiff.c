@@ -553,7 +553,7 @@ static void cases_thin(void)
         snprintf(name, sizeof name, "48x48x1 disc, %s", what[i]);
         /* measured (post, pre): face-on 23.5, 11.1; edge-on (a line a few
          * pixels high) 38.5, 19.0; oblique 28.8, 20.2 (post-alpha 18.0: the
-         * disc's grid gradient is 0 across its one voxel, so its splatted
+         * disc's voxel gradient is 0 across its one voxel, so its splatted
          * light is the eye-facing default).  Floors 3 dB under. */
         const double fpost[] = {20, 35, 25}, fpre[] = {8, 16, 15};
         run_case(name, d, &s, REF_GAUSS, fpost[i], fpre[i], 0, "");
@@ -639,10 +639,10 @@ static void cases_values(void)
         snprintf(name, sizeof name, "ball 48^3, %s", vc[i].name);
         /* measured post 39.0 (f32, u16), 42.0 (i16, 1e30, FLT_MAX: the ball
          * is larger at this iso), pre 22; floors 3 dB under.  Denormals: the
-         * grid gradients the pre-shaded pipelines use are ~1e-42, under the
+         * voxel gradients the pre-shaded pipelines use are ~1e-42, under the
          * 1e-30 below which every shading path treats a gradient as zero
          * (facing the eye); the post pipelines and the ray caster do the
-         * same, so they agree (43.5), while pre drops to 16.5 (floor 13). */
+         * same, so they agree (43.5), while pre drops to 17.9 (floor 13). */
         run_case(name, v, &s, REF_GAUSS, vc[i].fpre == 10 ? 10 : 36, vc[i].fpre, 0, vc[i].note);
         vs_volume_release(v);
     }

@@ -43,13 +43,16 @@ static void brute_gradient(const struct vs_volume *v, int i, int j, int k, doubl
             }
 }
 
-/* Largest angle (degrees) between the two gradients over all voxels, and
- * how many voxels have one gradient zero and the other not. */
-static double worst_angle(const struct vs_volume *v, int *zero_mismatch)
+/* Largest angle (degrees) between the two gradients over all voxels, how
+ * many voxels have one gradient zero and the other not, and the largest
+ * relative departure of |g| / |b| from the constant 0.5 / (4 ln 2) it
+ * must be (the face path and the interior one on one scale). */
+static double worst_angle(const struct vs_volume *v, int *zero_mismatch, double *scale_err)
 {
     const int *d = v->dims;
     double worst = 0.0;
     *zero_mismatch = 0;
+    *scale_err = 0.0;
     for (int k = 0; k < d[2]; k++)
         for (int j = 0; j < d[1]; j++)
             for (int i = 0; i < d[0]; i++) {
@@ -68,16 +71,18 @@ static double worst_angle(const struct vs_volume *v, int *zero_mismatch)
                 c = c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c;
                 const double a = acos(c) * 180.0 / M_PI;
                 if (a > worst) worst = a;
+                const double e = fabs(ng / nb / (0.5 / (4.0 * log(2.0))) - 1.0);
+                if (e > *scale_err) *scale_err = e;
             }
     return worst;
 }
 
 static void test_against_brute_force(void)
 {
-    const vs_type types[3] = {VS_U8, VS_I16, VS_F32};
+    const vs_type types[4] = {VS_U8, VS_I16, VS_U16, VS_F32};
     const int dims[3] = {9, 8, 7};
     const double sp[3] = {1.0, 1.5, 2.0};
-    for (int t = 0; t < 3; t++) {
+    for (int t = 0; t < 4; t++) {
         vs_volume *v;
         if (vs_volume_create(ctx, types[t], dims, sp, &v) != VS_OK) {
             CHECK(0, "volume: %s", vs_last_error(ctx));
@@ -88,7 +93,8 @@ static void test_against_brute_force(void)
         for (size_t i = 0; i < n; i++) {
             const double r = urand();
             if (types[t] == VS_U8) ((uint8_t *)data)[i] = (uint8_t)(255.0 * r);
-            if (types[t] == VS_I16) ((int16_t *)data)[i] = (int16_t)(2000.0 * r - 1000.0);
+            if (types[t] == VS_I16) ((int16_t *)data)[i] = (int16_t)(65535.0 * r - 32768.0);
+            if (types[t] == VS_U16) ((uint16_t *)data)[i] = (uint16_t)(65535.0 * r);
             if (types[t] == VS_F32) ((float *)data)[i] = (float)(10.0 * r - 3.0);
         }
         if (types[t] == VS_F32) {
@@ -97,9 +103,11 @@ static void test_against_brute_force(void)
         }
         vs_volume_update_range(v);
         int zm;
-        const double a = worst_angle(v, &zm);
-        printf("%-4s %dx%dx%d, base %g: worst angle to the brute-force derivative %.2e degrees\n",
-               vs_type_name(types[t]), dims[0], dims[1], dims[2], vs_volume_base(v), a);
+        double se;
+        const double a = worst_angle(v, &zm, &se);
+        printf("%-4s %dx%dx%d, base %g: worst angle to the brute-force derivative %.2e degrees, scale %.1e off\n",
+               vs_type_name(types[t]), dims[0], dims[1], dims[2], vs_volume_base(v), a, se);
+        CHECK(se < 1e-5, "%s: gradient magnitudes %.3g off the reconstruction's scale", vs_type_name(types[t]), se);
         CHECK(a < 1e-3, "%s: gradient %.3g degrees off the reconstruction's", vs_type_name(types[t]), a);
         CHECK(zm == 0, "%s: %d voxels with a zero gradient where the reconstruction has none", vs_type_name(types[t]),
               zm);
@@ -132,7 +140,9 @@ static void test_ramp(void)
     vs_volume_release(v);
 }
 
-/* Data spanning +-FLT_MAX: every gradient finite. */
+/* Data spanning +-FLT_MAX, mixed and as a step from -FLT_MAX to FLT_MAX
+ * along x (0.57 FLT_MAX there, over FLT_MAX if not halved): every
+ * gradient finite. */
 static void test_extremes(void)
 {
     const int dims[3] = {6, 6, 6};
@@ -140,15 +150,18 @@ static void test_extremes(void)
     vs_volume *v;
     if (vs_volume_create(ctx, VS_F32, dims, sp, &v) != VS_OK) return;
     float *f = vs_volume_data(v);
-    for (int i = 0; i < 216; i++) f[i] = (i % 7) < 3 ? FLT_MAX : -FLT_MAX;
-    vs_volume_update_range(v);
-    int bad = 0;
-    for (int i = 0; i < 216; i++) {
-        float g[3];
-        vs_voxel_gradient(v, i % 6, i / 6 % 6, i / 36, (size_t)i, g);
-        bad += !(isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]));
+    for (int pattern = 0; pattern < 2; pattern++) {
+        for (int i = 0; i < 216; i++)
+            f[i] = (pattern ? i % 6 >= 3 : (i % 7) < 3) ? FLT_MAX : -FLT_MAX;
+        vs_volume_update_range(v);
+        int bad = 0;
+        for (int i = 0; i < 216; i++) {
+            float g[3];
+            vs_voxel_gradient(v, i % 6, i / 6 % 6, i / 36, (size_t)i, g);
+            bad += !(isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]));
+        }
+        CHECK(bad == 0, "+-FLT_MAX, pattern %d: %d gradients not finite", pattern, bad);
     }
-    CHECK(bad == 0, "+-FLT_MAX: %d gradients not finite", bad);
     vs_volume_release(v);
 }
 

@@ -243,7 +243,9 @@ static int render_single(vs_context *ctx, const vs_volume *vol, const cli_opts *
 
 /* Voxels a brick needs beyond the ones it owns, so that every sheet point
  * it composites, and the neighbours its gradient reads (one pixel in the
- * sheet, one sheet across), see all the voxels whose kernel reaches them.
+ * sheet, one sheet across), see all the voxels whose kernel reaches them,
+ * and those voxels the neighbours their own gradient reads (two voxels:
+ * pre-shaded pipelines, src/voxel_gradient.h).
  * A pixel spans more than a voxel when zoomed out; perspective doubles the
  * margin for the far side. */
 static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3])
@@ -255,7 +257,7 @@ static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3]
     }
     double px_mm = extent / (s->zoom * s->width), step_mm = px_mm > s->slab * unit ? px_mm : s->slab * unit;
     double reach = ceil(step_mm / unit) * (s->perspective_fov > 0 ? 2 : 1);
-    return (int)ceil(s->kernel_radius) + 1 + (int)(reach < 64 ? reach : 64);
+    return (int)ceil(s->kernel_radius) + 2 + (int)(reach < 64 ? reach : 64);
 }
 
 static int run(int rank, int n, int argc, char **argv)
