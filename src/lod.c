@@ -238,8 +238,9 @@ vs_status vs_lod_get(vs_context *ctx, struct vs_pool *pool, vs_lod_cache **cache
     *ms = 0.0;
     *out = NULL;
     vs_lod_cache *c = *cache;
-    /* the spacing decides which axes halve: a new one, new levels */
-    if (c && !vs_volume_stamp_same_voxels(&c->from, vol)) {
+    /* the spacing decides which axes halve, and non-finite voxels are
+     * filtered as the value outside: a new one of either, new levels */
+    if (c && !vs_volume_stamp_same_field(&c->from, vol)) {
         vs_lod_cache_free(c);
         c = *cache = NULL;
     }

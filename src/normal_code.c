@@ -64,7 +64,7 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
     int pick = 0;
     for (int s = 0; s < VS_NORMAL_CODES_KEEP; s++) {
         vs_normal_codes *c = &slots[s];
-        if (c->code && vs_volume_stamp_same_voxels(&c->from, vol) && c->base == vs_volume_base(vol)) {
+        if (c->code && vs_volume_stamp_same_field(&c->from, vol)) {
             c->used = now;
             return c->code;
         }
@@ -90,7 +90,6 @@ _Atomic uint16_t *vs_normal_codes_get(vs_context *ctx, const struct vs_volume *v
     if (m == MAP_FAILED) return NULL;
     c->code = m;
     vs_volume_stamp_take(&c->from, vol);
-    c->base = vs_volume_base(vol);
     c->used = now;
     c->n = n;
     return c->code;

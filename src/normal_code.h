@@ -83,9 +83,8 @@ void vs_normal_table_free(vs_normal_table *tab);
 #define VS_NORMAL_CODES_ALL_BYTES (VS_NORMAL_CODES_MAX_BYTES + VS_NORMAL_CODES_MAX_BYTES / 4)
 _Static_assert(ATOMIC_SHORT_LOCK_FREE == 2, "kept codes are plain 16-bit stores and loads");
 typedef struct vs_normal_codes {
-    vs_volume_stamp from;        /* key: the volume, its voxels and spacing */
-    double base;                 /* and its outside value (vs_volume_base),
-                                    which voxels near a face read        */
+    vs_volume_stamp from;        /* key: the volume, its voxels, spacing and
+                                    outside value (vs_volume_stamp_same_field) */
     uint64_t used;               /* when last used (least recently replaced) */
     _Atomic uint16_t *code;      /* [n]: code + 1, 0 while unknown; mapped
                                     anonymous memory, so untouched bricks
@@ -117,12 +116,12 @@ static inline void vs_normal_code_scale(const struct vs_volume *vol, float sc[3]
     for (int a = 0; a < 3; a++) sc[a] = (float)(f / vol->spacing[a]);
 }
 
-/* The code of voxel (i, j, k), linear index idx, with sc from
+/* The code of the voxel of linear index idx, with sc from
  * vs_normal_code_scale. */
-static inline int vs_voxel_normal_code(const struct vs_volume *vol, const float sc[3], int i, int j, int k, size_t idx)
+static inline int vs_voxel_normal_code(const struct vs_volume *vol, const float sc[3], size_t idx)
 {
     float g[3];
-    vs_voxel_gradient(vol, i, j, k, idx, g);
+    vs_voxel_gradient(vol, idx, g);
     return vs_normal_code(g[0] * sc[0], g[1] * sc[1], g[2] * sc[2]);
 }
 

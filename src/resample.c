@@ -255,7 +255,7 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
     /* new voxels, a new spacing (the copy's size follows it) or a new
      * value outside the volume (its padding and NaN hold it: a new range
      * can move it): a new copy */
-    if (c && (!vs_volume_stamp_same_voxels(&c->from, vol) || c->base != vs_volume_base(vol))) {
+    if (c && !vs_volume_stamp_same_field(&c->from, vol)) {
         vs_resample_cache_free(c);
         c = *cache = NULL;
     }
@@ -268,7 +268,6 @@ vs_status vs_resample_get(vs_context *ctx, struct vs_pool *pool, vs_resample_cac
             free(c);
             return st;
         }
-        c->base = vs_volume_base(vol);
         *cache = c;
         *ms = vs_now_ms() - t0;
     } else {

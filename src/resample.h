@@ -19,7 +19,6 @@
 struct vs_relevant_cache;
 typedef struct vs_resample_cache {
     vs_volume_stamp from;            /* the volume, when copied, ranged, placed */
-    double base;                     /* its value outside the volume, which the copy holds */
     struct vs_volume *cubic;         /* the copy on cubic voxels */
     struct vs_relevant_cache *relevant; /* the copy's relevant voxels */
 } vs_resample_cache;

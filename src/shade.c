@@ -89,11 +89,8 @@ static inline void voxel_light(const vs_frame *F, const pend *e, float *d, float
             return;
         }
     }
-    const int *dims = F->vol->dims;
-    const int i = (int)(v % (uint32_t)dims[0]), j = (int)(v / (uint32_t)dims[0] % (uint32_t)dims[1]),
-              k = (int)(v / ((uint32_t)dims[0] * (uint32_t)dims[1]));
     if (F->nterms) {
-        const int c = vs_voxel_normal_code(F->vol, F->nscale, i, j, k, v);
+        const int c = vs_voxel_normal_code(F->vol, F->nscale, v);
         if (F->ncode) atomic_store_explicit(&F->ncode[e->c], (uint16_t)(c + 1), memory_order_relaxed);
         *d = F->nterms[c][0];
         *sp = F->nterms[c][1];
@@ -101,7 +98,7 @@ static inline void voxel_light(const vs_frame *F, const pend *e, float *d, float
     }
     const vs_camera *cam = &F->cam;
     float g[3];
-    vs_voxel_gradient(F->vol, i, j, k, v, g);
+    vs_voxel_gradient(F->vol, v, g);
     double gw[3] = {g[0] / F->spacing[0], g[1] / F->spacing[1], g[2] / F->spacing[2]};
     double n[3] = {gw[0] * cam->right[0] + gw[1] * cam->right[1] + gw[2] * cam->right[2],
                    -(gw[0] * cam->up[0] + gw[1] * cam->up[1] + gw[2] * cam->up[2]),

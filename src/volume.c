@@ -389,11 +389,13 @@ void vs_volume_stamp_take(vs_volume_stamp *st, const struct vs_volume *v)
     memcpy(st->spacing, v->spacing, sizeof st->spacing);
     memcpy(st->affine, v->affine, sizeof st->affine);
     st->has_orientation = v->has_orientation;
+    st->base = vs_volume_base(v);
 }
 
-int vs_volume_stamp_same_voxels(const vs_volume_stamp *st, const struct vs_volume *v)
+int vs_volume_stamp_same_field(const vs_volume_stamp *st, const struct vs_volume *v)
 {
-    return st->vol == v && st->data_serial == v->data_serial && !memcmp(st->spacing, v->spacing, sizeof st->spacing);
+    return st->vol == v && st->data_serial == v->data_serial && !memcmp(st->spacing, v->spacing, sizeof st->spacing) &&
+           st->base == vs_volume_base(v);
 }
 
 int vs_volume_stamp_same_place(const vs_volume_stamp *st, const struct vs_volume *v)

@@ -123,10 +123,13 @@ typedef struct vs_volume_stamp {
     uint64_t serial, data_serial;
     double spacing[3], affine[3][4];
     int has_orientation;
+    double base; /* vs_volume_base: what copies read outside and for non-finite voxels */
 } vs_volume_stamp;
 void vs_volume_stamp_take(vs_volume_stamp *st, const struct vs_volume *v);
-/* The same volume, voxels and spacing. */
-int vs_volume_stamp_same_voxels(const vs_volume_stamp *st, const struct vs_volume *v);
+/* The same volume, voxels, spacing and value outside (vs_volume_base,
+ * which a declared range can move): what a copy made from the voxels
+ * (levels, the cubic copy, normal codes) depends on. */
+int vs_volume_stamp_same_field(const vs_volume_stamp *st, const struct vs_volume *v);
 /* The same transform and orientation. */
 int vs_volume_stamp_same_place(const vs_volume_stamp *st, const struct vs_volume *v);
 

@@ -46,10 +46,11 @@ static const double wr2[5] = {1.0, 0x1p-2, 0x1p-4, 0x1p-6, 0x1p-8};
                2 * DIFF(0, 0, 2);                                                                               \
     } while (0)
 
-void vs_voxel_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3])
+void vs_voxel_gradient(const struct vs_volume *v, size_t idx, float g[3])
 {
     const int *d = v->dims;
     const ptrdiff_t sx = d[0], sxy = (ptrdiff_t)d[0] * d[1];
+    const int i = (int)(idx % (size_t)sx), j = (int)(idx / (size_t)sx % (size_t)d[1]), k = (int)(idx / (size_t)sxy);
     double a[3] = {0.0, 0.0, 0.0};
     if (i >= 2 && j >= 2 && k >= 2 && i < d[0] - 2 && j < d[1] - 2 && k < d[2] - 2) {
         switch (v->type) {

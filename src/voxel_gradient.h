@@ -7,7 +7,7 @@
 
 struct vs_volume;
 
-/* The gradient at voxel (i, j, k), linear index idx, of the sum of the
+/* The gradient at the voxel of linear index idx, of the sum of the
  * kernel 2^(-2 r^2) over the voxels, what lies outside the volume and
  * non-finite voxels reading as vs_volume_base, in index units, halved
  * (so data spanning +-FLT_MAX stays finite) and up to the kernel's
@@ -17,6 +17,6 @@ struct vs_volume;
  * neighbours weigh 2^-8 of a face neighbour or less; a radius under 2 does
  * not reach the diagonal ones, which still tilt the normal only as the
  * field's smoothing would). */
-void vs_voxel_gradient(const struct vs_volume *v, int i, int j, int k, size_t idx, float g[3]);
+void vs_voxel_gradient(const struct vs_volume *v, size_t idx, float g[3]);
 
 #endif

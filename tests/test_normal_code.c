@@ -355,7 +355,7 @@ static void test_codes_kept(void)
                 if (!got) continue;
                 filled++;
                 const size_t idx = (size_t)i + (size_t)d[0] * ((size_t)j + (size_t)d[1] * (size_t)k);
-                wrong += got - 1 != (unsigned)vs_voxel_normal_code(v, sc, i, j, k, idx);
+                wrong += got - 1 != (unsigned)vs_voxel_normal_code(v, sc, idx);
             }
     printf("kept codes after one frame: %zu voxels, %zu wrong\n", filled, wrong);
     CHECK(kept != NULL && filled > 1000, "the context kept %zu codes", filled);

@@ -59,7 +59,7 @@ static double worst_angle(const struct vs_volume *v, int *zero_mismatch, double 
                 const size_t idx = (size_t)i + (size_t)d[0] * ((size_t)j + (size_t)d[1] * (size_t)k);
                 float g[3];
                 double b[3];
-                vs_voxel_gradient(v, i, j, k, idx, g);
+                vs_voxel_gradient(v, idx, g);
                 brute_gradient(v, i, j, k, b);
                 const double ng = sqrt((double)g[0] * g[0] + (double)g[1] * g[1] + (double)g[2] * g[2]);
                 const double nb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
@@ -77,17 +77,22 @@ static double worst_angle(const struct vs_volume *v, int *zero_mismatch, double 
     return worst;
 }
 
+/* A volume of unit spacing (sp NULL) or sp, or NULL with a failed check. */
+static vs_volume *new_volume(vs_type t, const int dims[3], const double *sp)
+{
+    vs_volume *v = NULL;
+    CHECK(vs_volume_create(ctx, t, dims, sp, &v) == VS_OK, "volume: %s", vs_last_error(ctx));
+    return v;
+}
+
 static void test_against_brute_force(void)
 {
     const vs_type types[4] = {VS_U8, VS_I16, VS_U16, VS_F32};
     const int dims[3] = {9, 8, 7};
     const double sp[3] = {1.0, 1.5, 2.0};
     for (int t = 0; t < 4; t++) {
-        vs_volume *v;
-        if (vs_volume_create(ctx, types[t], dims, sp, &v) != VS_OK) {
-            CHECK(0, "volume: %s", vs_last_error(ctx));
-            return;
-        }
+        vs_volume *v = new_volume(types[t], dims, sp);
+        if (!v) return;
         const size_t n = (size_t)dims[0] * dims[1] * dims[2];
         void *data = vs_volume_data(v);
         for (size_t i = 0; i < n; i++) {
@@ -120,9 +125,8 @@ static void test_against_brute_force(void)
 static void test_ramp(void)
 {
     const int dims[3] = {8, 8, 8};
-    const double sp[3] = {1.0, 1.0, 1.0};
-    vs_volume *v;
-    if (vs_volume_create(ctx, VS_F32, dims, sp, &v) != VS_OK) return;
+    vs_volume *v = new_volume(VS_F32, dims, NULL);
+    if (!v) return;
     float *f = vs_volume_data(v);
     for (int k = 0; k < 8; k++)
         for (int j = 0; j < 8; j++)
@@ -133,7 +137,7 @@ static void test_ramp(void)
         for (int j = 2; j < 6; j++)
             for (int i = 2; i < 6; i++) {
                 float g[3];
-                vs_voxel_gradient(v, i, j, k, (size_t)(i + 8 * (j + 8 * k)), g);
+                vs_voxel_gradient(v, (size_t)(i + 8 * (j + 8 * k)), g);
                 bad += !(fabsf(g[0] / g[2] - 0.6f) < 1e-6f && fabsf(g[1] / g[2] + 0.4f) < 1e-6f);
             }
     CHECK(bad == 0, "ramp: %d interior voxels not along (3, -2, 5)", bad);
@@ -146,9 +150,8 @@ static void test_ramp(void)
 static void test_extremes(void)
 {
     const int dims[3] = {6, 6, 6};
-    const double sp[3] = {1.0, 1.0, 1.0};
-    vs_volume *v;
-    if (vs_volume_create(ctx, VS_F32, dims, sp, &v) != VS_OK) return;
+    vs_volume *v = new_volume(VS_F32, dims, NULL);
+    if (!v) return;
     float *f = vs_volume_data(v);
     for (int pattern = 0; pattern < 2; pattern++) {
         for (int i = 0; i < 216; i++)
@@ -157,7 +160,7 @@ static void test_extremes(void)
         int bad = 0;
         for (int i = 0; i < 216; i++) {
             float g[3];
-            vs_voxel_gradient(v, i % 6, i / 6 % 6, i / 36, (size_t)i, g);
+            vs_voxel_gradient(v, (size_t)i, g);
             bad += !(isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]));
         }
         CHECK(bad == 0, "+-FLT_MAX, pattern %d: %d gradients not finite", pattern, bad);
