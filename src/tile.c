@@ -17,6 +17,7 @@
 #include "shade.h"
 #include "trace.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -146,6 +147,9 @@ void vs_tile_render(void *arg, int worker, int task)
     /* colours padded by one float: SIMD compositing reads 4 floats a pixel */
     const size_t o_g = take(&c, ((size_t)npix * 3 + 1) * sizeof(float));
     const size_t o_alpha = take(&c, (size_t)npix * sizeof(float));
+    const int terms = F->preint && !F->cam.persp;
+    const size_t o_term = take(&c, terms ? (size_t)npix * 2 * sizeof(float) : 0);
+    const size_t o_term_k = take(&c, terms ? (size_t)npix * sizeof(int) : 0);
     const size_t o_sat = take(&c, (size_t)(t.tw + 1) * (t.th + 1) * sizeof(int));
     const size_t o_live = take(&c, (size_t)(2 * t.th + 2 * t.bh) * sizeof(int));
     const size_t o_order = take(&c, (size_t)nbr * sizeof(int));
@@ -163,7 +167,12 @@ void vs_tile_render(void *arg, int worker, int task)
     unsigned char *A = scr->arena;
     float *sheets = (float *)(A + o_sheets);
     float *acc = (float *)(A + o_acc);
-    shade_buf sb = {(float *)(A + o_alpha), (float *)(A + o_g)};
+    shade_buf sb = {(float *)(A + o_alpha), (float *)(A + o_g), NULL, NULL};
+    if (terms) {
+        sb.term = (float *)(A + o_term);
+        sb.term_k = (int *)(A + o_term_k);
+        for (int i = 0; i < npix; i++) sb.term_k[i] = INT_MIN;
+    }
     int *sat = (int *)(A + o_sat);
     /* per own row, the columns [live0, live1) not yet fully opaque; per
      * buffer row, a sheet's shaded span */

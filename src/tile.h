@@ -150,6 +150,12 @@ typedef struct vs_tile_scratch {
 typedef struct shade_buf {
     float *alpha; /* tw*th */
     float *g;     /* tw*th*3: gradient, then shaded colour */
+    /* pre-integrated post-cd and post-gs: per pixel, the Phong terms
+     * (diffuse, specular) of sheet k + 1's gradient that shading sheet k
+     * took, and that k + 1 (term_k; else INT_MIN) to reuse them there;
+     * NULL without pre-integration */
+    float *term;
+    int *term_k;
 } shade_buf;
 
 
