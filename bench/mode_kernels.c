@@ -88,7 +88,7 @@ static void shade_bench_init(shade_bench *B)
     for (int i = 0; i < 255 * 181; i++) B->phi_bin[i] = (uint16_t)(RND() * SHADE_NP);
     for (int i = 0; i < 4 * 256 * 256; i++) preint_table[i] = RND();
 #undef RND
-    B->PT = (vs_preint_tabs){preint_table, 0.0f, 255.0f / 100.0f, 256};
+    B->PT = (vs_preint_tabs){preint_table, 0.0f, 255.0f / 100.0f, 256, 0.0f};
     for (int i = 0; i < VS_PROJECT_MAX; i++) B->vox[i] = (uint16_t)i;
     const float c = 1.6f, sn = 1.6f; /* 2.26 px per voxel, turned 45 degrees */
     B->P = (vs_project_in){.base = {100.0f, 100.0f, 50.0f},

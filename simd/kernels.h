@@ -43,6 +43,10 @@ typedef struct vs_preint_tabs {
     const float *tab;
     float vmin, scale; /* coordinate x = (v - vmin) * scale, in [0, n - 1] */
     int n;
+    /* entries (i, j) with i, j <= zero_x have opacity 0: a segment whose
+     * three coordinates lie below zero_x is transparent, and a kernel may
+     * skip its look-ups (0: none known) */
+    float zero_x;
 } vs_preint_tabs;
 
 /* The cell of value v along one axis of that table and the fraction

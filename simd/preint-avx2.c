@@ -2,7 +2,9 @@
  * step, bit-identical to scalar.c: the cells as vs_preint_cell (clamped
  * with max and min, so NaN and infinity take the table's ends), the four
  * corners of each half by gathers, the same multiplies and adds in the
- * same order.  The tail goes to the scalar reference. */
+ * same order; eight segments below the table's transparent block
+ * (vs_preint_tabs.zero_x) are 0 without look-ups.  The tail goes to the
+ * scalar reference. */
 #include "kernels.h"
 
 #include <immintrin.h>
@@ -40,10 +42,25 @@ static inline __m256 alpha8(const vs_preint_tabs *P, __m256 f, __m256 b)
 void vs_preint_alpha_avx2(float *alpha, const float *f, const float *m, const float *b, int n,
                           const vs_preint_tabs *P)
 {
-    const __m256 one = _mm256_set1_ps(1.0f);
+    const __m256 one = _mm256_set1_ps(1.0f), vmin = _mm256_set1_ps(P->vmin), scale = _mm256_set1_ps(P->scale);
+    const __m256 zx = _mm256_set1_ps(P->zero_x);
+    const int skip = P->zero_x > 0.0f;
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         const __m256 mv = _mm256_loadu_ps(m + i);
+        if (skip) {
+            /* all three ends below the transparent block: every corner the
+             * reference reads is 0, and so is its result (NaN lanes fail
+             * the test and take the look-ups) */
+#define BELOW(v) _mm256_cmp_ps(_mm256_mul_ps(_mm256_sub_ps((v), vmin), scale), zx, _CMP_LT_OQ)
+            const __m256 in = _mm256_and_ps(_mm256_and_ps(BELOW(_mm256_loadu_ps(f + i)), BELOW(mv)),
+                                            BELOW(_mm256_loadu_ps(b + i)));
+#undef BELOW
+            if (_mm256_movemask_ps(in) == 0xff) {
+                _mm256_storeu_ps(alpha + i, _mm256_setzero_ps());
+                continue;
+            }
+        }
         const __m256 a1 = alpha8(P, _mm256_loadu_ps(f + i), mv), a2 = alpha8(P, mv, _mm256_loadu_ps(b + i));
         _mm256_storeu_ps(alpha + i, _mm256_add_ps(a1, _mm256_mul_ps(_mm256_sub_ps(one, a1), a2)));
     }

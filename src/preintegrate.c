@@ -108,6 +108,23 @@ static void build_rows(void *arg, int worker, int task)
     }
 }
 
+/* The largest z with every entry (i, j), i, j <= z, transparent (0 when
+ * the first is not, or only it is): the air below a transfer function's
+ * first opacity, where classification need not look anything up. */
+static int zero_block(const float *tab)
+{
+    if (tab[0] != 0.0f) return 0;
+    int z = 0;
+    while (z + 1 < VS_PREINT_N) {
+        const int k = z + 1;
+        for (int i = 0; i <= k; i++)
+            if (tab[4 * ((size_t)k * VS_PREINT_N + i)] != 0.0f || tab[4 * ((size_t)i * VS_PREINT_N + k)] != 0.0f)
+                return z;
+        z = k;
+    }
+    return z;
+}
+
 int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_pool *pool)
 {
     if (p->tab && p->key_slab == slab && p->key_vmin == c->vmin && p->key_scale == c->scale &&
@@ -135,7 +152,7 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
     }
     p->vmin = c->vmin;
     p->scale = (VS_PREINT_N - 1) / (c->vmax - c->vmin);
-    p->tabs = (vs_preint_tabs){p->tab, (float)p->vmin, (float)p->scale, VS_PREINT_N};
+    p->tabs = (vs_preint_tabs){p->tab, (float)p->vmin, (float)p->scale, VS_PREINT_N, 0.0f};
     build_job J = {p, c, slab, &P};
     const int ntask = (VS_PREINT_N + ROWS - 1) / ROWS;
     if (pool)
@@ -144,6 +161,7 @@ int vs_preint_update(vs_preint *p, const vs_classify *c, double slab, struct vs_
         for (int t = 0; t < ntask; t++) build_rows(&J, 0, t);
     free(P.t);
     free(P.k);
+    p->tabs.zero_x = (float)zero_block(p->tab);
     memcpy(p->key_alpha, c->alpha, sizeof p->key_alpha);
     memcpy(p->key_color, c->color, sizeof p->key_color);
     p->key_vmin = c->vmin;

@@ -375,9 +375,16 @@ static int check_preint_alpha(const char *isa, vs_preint_alpha_fn fn)
     for (int i = 0; i < 4 * PN * PN; i++) preint_tab[i] = frand() * 0.5f + 0.5f;
     static float f[TMAX + PAD], m[TMAX + PAD], b[TMAX + PAD], ar[TMAX + PAD], ao[TMAX + PAD];
     int cases = 0;
-    /* two domains: [-10, 10], and [0, 20], where -0 and 0 give x = -0 and +0 */
-    for (int dom = 0; dom < 2; dom++) {
-        const vs_preint_tabs P = {preint_tab, dom ? 0.0f : -10.0f, (PN - 1) / 20.0f, PN};
+    /* two domains: [-10, 10], and [0, 20], where -0 and 0 give x = -0 and +0;
+     * then [-10, 10] again with a transparent block up to entry ZB, whose
+     * segments a kernel may skip (values mostly inside it and at its edge) */
+    enum { ZB = 120 };
+    for (int dom = 0; dom < 3; dom++) {
+        if (dom == 2)
+            for (int i = 0; i <= ZB; i++)
+                for (int j = 0; j <= ZB; j++) preint_tab[4 * (i * PN + j)] = 0.0f;
+        const vs_preint_tabs P = {preint_tab, dom == 1 ? 0.0f : -10.0f, (PN - 1) / 20.0f, PN, dom == 2 ? ZB : 0.0f};
+        const float zv = P.vmin + (float)ZB / P.scale; /* x = ZB */
         for (int n = 0; n <= TMAX; n++)
             for (int off = 0; off < 3; off++) {
                 for (int i = 0; i < TMAX + PAD; i++) {
@@ -385,6 +392,12 @@ static int check_preint_alpha(const char *isa, vs_preint_alpha_fn fn)
                     m[i] = density();
                     b[i] = density();
                     ar[i] = ao[i] = frand();
+                    if (dom == 2 && (i / 8) % 4 != 3) { /* runs inside the block, one in four mixed */
+                        f[i] = -10.0f + (zv + 10.0f) * frand();
+                        m[i] = -10.0f + (zv + 10.0f) * frand();
+                        b[i] = (i % 5 == 0) ? nextafterf(zv, i % 2 ? INFINITY : -INFINITY)
+                                            : -10.0f + (zv + 10.0f) * frand();
+                    }
                 }
                 /* the cells' edges: x = +-0, just below 0, and values at and
                  * next to x = n - 2 and n - 1, where the cell stops growing */

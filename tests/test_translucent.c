@@ -68,6 +68,13 @@ static void test_table(void)
         const double ds = slabs[si];
         CHECK(vs_preint_update(p, c, ds, NULL), "build");
         printf("table %dx%d, slab %.2f: built in %.2f ms\n", VS_PREINT_N, VS_PREINT_N, ds, p->ms_build);
+        /* the transparent block: every entry up to zero_x is 0, the next row is not */
+        const int z = (int)p->tabs.zero_x;
+        int zeros = 1, next = 0;
+        for (int i = 0; i <= z; i++)
+            for (int j = 0; j <= z; j++) zeros &= p->tab[4 * (i * VS_PREINT_N + j)] == 0.0f;
+        for (int j = 0; j <= z + 1; j++) next |= p->tab[4 * ((z + 1) * VS_PREINT_N + j)] != 0.0f;
+        CHECK(z > 0 && zeros && next, "transparent block up to %d: zeros %d, next row nonzero %d", z, zeros, next);
         float e[4];
         /* constant inside the box */
         vs_preint_lookup(p, 0.45f, 0.45f, e);
