@@ -47,11 +47,7 @@ static void perspective_gradients(const tile_ctx *t, int k, const spans *r, cons
         for (int x = r->xa[y]; x < r->xb[y]; x++) {
             int o = (y - 1) * t->tw + (x - 1);
             if (!(alpha[o] > 0.0f)) continue;
-            const float u = (float)((x + t->ox) - cam->cx);
-            float *p = g + 3 * o;
-            p[0] *= sk;
-            p[1] *= sk;
-            p[2] -= (p[0] * u + p[1] * v) * cz;
+            vs_perspective_gradient(g + 3 * o, sk, (float)((x + t->ox) - cam->cx), v, cz);
         }
     }
 }

@@ -147,7 +147,7 @@ void vs_tile_render(void *arg, int worker, int task)
     /* colours padded by one float: SIMD compositing reads 4 floats a pixel */
     const size_t o_g = take(&c, ((size_t)npix * 3 + 1) * sizeof(float));
     const size_t o_alpha = take(&c, (size_t)npix * sizeof(float));
-    const int terms = F->preint && !F->cam.persp;
+    const int terms = F->preint && !st->pre_shaded; /* shade_preint.c keeps terms */
     const size_t o_term = take(&c, terms ? (size_t)npix * 2 * sizeof(float) : 0);
     const size_t o_term_k = take(&c, terms ? (size_t)npix * sizeof(int) : 0);
     const size_t o_sat = take(&c, (size_t)(t.tw + 1) * (t.th + 1) * sizeof(int));

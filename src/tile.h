@@ -153,7 +153,7 @@ typedef struct shade_buf {
     /* pre-integrated post-cd and post-gs: per pixel, the Phong terms
      * (diffuse, specular) of sheet k + 1's gradient that shading sheet k
      * took, and that k + 1 (term_k; else INT_MIN) to reuse them there;
-     * NULL without pre-integration */
+     * NULL unless pre-integrated post-cd or post-gs */
     float *term;
     int *term_k;
 } shade_buf;

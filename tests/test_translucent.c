@@ -148,12 +148,15 @@ static vs_settings truth_settings(const vs_tf_point *tf, int n)
 /* The sphere with the shell against the exact-Gaussian ray caster (the
  * field splatting reconstructs, so what differs is the sampling along the
  * ray): pre-integration must beat plain sheets of the same thickness by a
- * margin, and match plain sheets four times thinner. */
-static void test_shell(void)
+ * margin, and match plain sheets four times thinner; orthographic, and
+ * with perspective (fov degrees), where the sheets' gradients are brought
+ * to one frame before a segment is lit from both its ends. */
+static void test_shell(double fov)
 {
     vs_volume *v = tu_scene(ctx, "sphere:48");
     if (!v) return;
     vs_settings s = truth_settings(shell_tf, (int)(sizeof shell_tf / sizeof *shell_tf));
+    s.perspective_fov = fov;
     vs_image truth;
     if (!render(v, &s, &truth)) {
         tu_failures++;
@@ -179,9 +182,9 @@ static void test_shell(void)
             db[r] = psnr_rgba(&truth, &img);
             vs_image_free(&img);
         }
-        printf("shell %-8s vs exact-Gaussian ray caster: plain ds 1 %.2f dB, pre-integrated ds 1 %.2f dB, "
+        printf("shell %-8s fov %2.0f vs exact-Gaussian ray caster: plain ds 1 %.2f dB, pre-integrated ds 1 %.2f dB, "
                "plain ds 0.25 %.2f dB\n",
-               vs_pipeline_name(pl[i]), db[0], db[1], db[2]);
+               vs_pipeline_name(pl[i]), fov, db[0], db[1], db[2]);
         CHECK(db[1] >= db[0] + 6.0, "%s: pre-integration %.2f dB not 6 dB above plain sheets %.2f dB",
               vs_pipeline_name(pl[i]), db[1], db[0]);
         CHECK(db[1] >= db[2] - 1.0, "%s: pre-integration %.2f dB short of plain ds 0.25 %.2f dB",
@@ -362,7 +365,8 @@ int main(void)
     test_table();
     test_light_range();
     test_post_alpha();
-    test_shell();
+    test_shell(0.0);
+    test_shell(40.0);
     test_curved();
     test_engine_preset();
     vs_context_release(ctx);
