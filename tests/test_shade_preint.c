@@ -161,7 +161,7 @@ static void run(const vs_preint *P, int gs, int exact, int persp)
     F->base = 0.125;
     F->cam.px_per_mm = 1.3;
     F->cam.z_per_mm = 0.7;
-    if (persp) { /* the eye 40 view units before z = 0, the image centre off the tile */
+    if (persp) { /* the eye 40 view units before z = 0, the image centre inside the tile */
         F->cam.persp = 1;
         F->cam.persp_dz = 40.0;
         F->cam.focal_px = 30.0;

@@ -148,9 +148,10 @@ static vs_settings truth_settings(const vs_tf_point *tf, int n)
 /* The sphere with the shell against the exact-Gaussian ray caster (the
  * field splatting reconstructs, so what differs is the sampling along the
  * ray): pre-integration must beat plain sheets of the same thickness by a
- * margin, and match plain sheets four times thinner; orthographic, and
- * with perspective (fov degrees), where the sheets' gradients are brought
- * to one frame before a segment is lit from both its ends. */
+ * margin, reach a fixed floor, and match plain sheets four times thinner;
+ * orthographic, and with perspective (fov degrees), where the sheets'
+ * gradients are brought to one frame before a segment is lit from both
+ * its ends. */
 static void test_shell(double fov)
 {
     vs_volume *v = tu_scene(ctx, "sphere:48");
@@ -189,6 +190,9 @@ static void test_shell(double fov)
               vs_pipeline_name(pl[i]), db[1], db[0]);
         CHECK(db[1] >= db[2] - 1.0, "%s: pre-integration %.2f dB short of plain ds 0.25 %.2f dB",
               vs_pipeline_name(pl[i]), db[1], db[2]);
+        /* and in absolute terms (44.7-46.8 dB measured, orthographic and at 40 degrees), so
+         * that an error every pipeline shares cannot pass on margins alone */
+        CHECK(db[1] >= 43.0, "%s: pre-integrated %.2f dB, under 43 dB", vs_pipeline_name(pl[i]), db[1]);
     }
     vs_image_free(&truth);
     vs_volume_release(v);
