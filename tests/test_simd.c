@@ -392,6 +392,8 @@ static int check_preint_alpha(const char *isa, vs_preint_alpha_fn fn)
                     m[i] = density();
                     b[i] = density();
                     ar[i] = ao[i] = frand();
+                    if (dom < 2 && (i / 8) % 4 == 1) /* runs below the table: its first entry, not 0 */
+                        f[i] = m[i] = b[i] = P.vmin - 1.0f - frand();
                     if (dom == 2 && (i / 8) % 4 != 3) { /* runs inside the block, one in four mixed */
                         f[i] = -10.0f + (zv + 10.0f) * frand();
                         m[i] = -10.0f + (zv + 10.0f) * frand();
