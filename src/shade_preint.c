@@ -160,7 +160,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const int persp = cam->persp && !gs;
     const float sk1 = persp ? (float)vs_camera_sheet_scale(cam, sv->k + 1, F->fp.slab) : 1.0f;
     const float cz = persp ? (float)(cam->px_per_mm / (cam->focal_px * cam->z_per_mm)) : 0.0f;
-    const float slab = (float)F->fp.slab, base = (float)F->base, two_slab = 2.0f * slab;
+    const float slab = (float)F->fp.slab, base = (float)F->base;
     const ptrdiff_t st = t->stride;
     batch B;
     B.n = B.ng = 0;
@@ -177,7 +177,15 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
              * sheets' rows in place) */
             float vf4[CHUNK], vm[CHUNK], vb4[CHUNK], ff[CHUNK], fm[CHUNK], fb[CHUNK];
             const float *vf = vf4, *vb = vb4;
-            float g1[CHUNK][3], gmz[CHUNK];
+            /* sheet k + 1's gradient by the kernel its classification
+             * runs (the pipeline's opacity table is off with
+             * pre-integration: gradients only), so that its terms can be
+             * kept; post-cd's central differences read sheets k and k + 2
+             * and, at the middle, the difference across the segment: each
+             * depth difference centred where it is used (one-sided ones,
+             * or the ends' mean at the middle, measured 0.7 dB worse on the
+             * translucent head) */
+            float g1[CHUNK][3], gmz[CHUNK], unused[CHUNK];
             int cf[CHUNK], cm[CHUNK], cb[CHUNK];
             if (gs) {
                 const float *q4 = sv->q + 4 * b0, *n4 = sv->next + 4 * b0;
@@ -185,26 +193,17 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                     vf4[i] = q4[4 * i];
                     vb4[i] = n4[4 * i];
                     vm[i] = vs_preint_mid_gs(q4 + 4 * i, n4 + 4 * i);
-                    /* sheet k + 1's gradient as its classification takes it */
-                    for (int c = 0; c < 3; c++) g1[i][c] = n4[4 * i + 1 + c] / slab;
                 }
+                F->kern.classify_gs(unused, g1[0], n4, n, sv->tabs);
             } else {
-                const float *q = sv->q + b0, *qp = sv->prev + b0, *qn = sv->next + b0, *n2 = sv->next2 + b0;
+                const float *q = sv->q + b0, *qp = sv->prev + b0, *qn = sv->next + b0;
                 vf = q;
                 vb = qn;
-                /* sheet k + 1's central differences (sheets k and k + 2), as
-                 * its classification takes them, and at the middle the
-                 * difference across the segment: each depth difference
-                 * centred where it is used (one-sided ones, or the ends'
-                 * mean at the middle, measured 0.7 dB worse on the
-                 * translucent head) */
                 for (int i = 0; i < n; i++) {
                     vm[i] = vs_preint_mid_cd(qp[i], q[i], qn[i]);
-                    g1[i][0] = 0.5f * (qn[i + 1] - qn[i - 1]);
-                    g1[i][1] = 0.5f * (qn[i + st] - qn[i - st]);
-                    g1[i][2] = (n2[i] - q[i]) / two_slab;
                     gmz[i] = (qn[i] - q[i]) / slab;
                 }
+                F->kern.classify_cd(unused, g1[0], qn, q, sv->next2 + b0, st, n, sv->tabs);
             }
             cells(T, base, vf, cf, ff, n);
             cells(T, base, vm, cm, fm, n);
