@@ -49,8 +49,20 @@ for f in "$SRC"/tests/fuzz/regressions/nrrd/*; do
     set -e
     vg "$want" "$T/in.nrrd"
 done
-vg 1 "$SRC/tests/fuzz/regressions/stack/truncated-deflate-strips.tif"
-for f in "$SRC"/tests/fuzz/regressions/stack/uninit-*.tif; do vg 1 "$f"; done
-vg 1 "$SRC/tests/fuzz/regressions/tar/truncated-deflate-strips.tar"
-vg 0 "$SRC/tests/fuzz/seeds/stack/u16_2pages.tif"
+# OpenImageIO loads Highway, whose initialiser reads the time-stamp counter
+# with RDTSCP.  Where the CPU runs RDTSCP but its CPUID does not list it
+# (some virtual machines), valgrind refuses the instruction: SIGILL in
+# libhwy before any of vsplat's code runs.  The TIFF cases cannot run
+# under memcheck there; the ASan+UBSan suite still reads these files.
+set +e
+valgrind -q "$VSPLAT" info "$SRC/tests/fuzz/seeds/stack/u16_2pages.tif" >/dev/null 2>"$T/probe"
+set -e
+if grep -q 'Illegal opcode' "$T/probe" && grep -q 'libhwy' "$T/probe"; then
+    echo "SKIP (TIFF cases only): valgrind cannot execute libhwy's RDTSCP on this CPU (CPUID hides it)"
+else
+    vg 1 "$SRC/tests/fuzz/regressions/stack/truncated-deflate-strips.tif"
+    for f in "$SRC"/tests/fuzz/regressions/stack/uninit-*.tif; do vg 1 "$f"; done
+    vg 1 "$SRC/tests/fuzz/regressions/tar/truncated-deflate-strips.tar"
+    vg 0 "$SRC/tests/fuzz/seeds/stack/u16_2pages.tif"
+fi
 tu_done
