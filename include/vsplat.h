@@ -237,6 +237,14 @@ typedef struct vs_settings {
      * copy is at most the volume's size plus 64 MB; 1: whatever its size;
      * 0: never.  Not with a crop box, and not for sheared grids. */
     int resample;
+
+    /* post-cd's differences within a sheet: 2 the paper's central
+     * differences of neighbouring pixels; 4 the four-point stencil, which
+     * reads two pixels each side and follows the detail a sheet carries
+     * when voxels lie less than a pixel apart on the image; 0 (default):
+     * four-point up to 0.8 pixel a voxel, two-point from 0.9 pixel, mixed
+     * linearly between. */
+    int cd_stencil;
 } vs_settings;
 
 typedef struct vs_stage_times {

@@ -73,8 +73,17 @@ static inline void classify8(float *alpha, float *g, const float *q, const float
             _mm256_maskstore_ps(alpha, in, a);
         if (none) return; /* no gradient is read here */
     }
-    __m256 gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
-    __m256 gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
+    __m256 gx, gy;
+    if (T->cd_wide > 0.0f) { /* as scalar.c: multiply, multiply, subtract */
+        const __m256 c1 = _mm256_set1_ps(0.5f + 2.0f * T->cd_wide), c2 = _mm256_set1_ps(T->cd_wide);
+        gx = _mm256_sub_ps(_mm256_mul_ps(c1, _mm256_sub_ps(LD(q + 1), LD(q - 1))),
+                           _mm256_mul_ps(c2, _mm256_sub_ps(LD(q + 2), LD(q - 2))));
+        gy = _mm256_sub_ps(_mm256_mul_ps(c1, _mm256_sub_ps(LD(q + stride), LD(q - stride))),
+                           _mm256_mul_ps(c2, _mm256_sub_ps(LD(q + 2 * stride), LD(q - 2 * stride))));
+    } else {
+        gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
+        gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
+    }
     __m256 gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
 #undef LD
     if (m == 8) {

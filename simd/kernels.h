@@ -30,6 +30,12 @@ typedef struct vs_shade_tabs {
     const float *color;     /* [VS_KTAB][3]                                   */
     float slab, two_slab;   /* slab thickness (post-gs gradients), and twice it
                                (divisor of the z central difference)        */
+    float cd_wide;          /* post-cd's in-sheet differences: 0, the two-
+                               point 0.5 (q[i+1] - q[i-1]); else w > 0 mixes
+                               in the four-point stencil, (0.5 + 2w)
+                               (q[i+1] - q[i-1]) - w (q[i+2] - q[i-2]), which
+                               reads two pixels each side (w = 1/12: the
+                               four-point stencil itself)                   */
     float ppm, zpm;         /* gradient: view space -> eye frame per mm       */
     int nl;                 /* longitude bins                                 */
     const uint16_t *lambda_bin;
@@ -171,6 +177,7 @@ typedef struct vs_kernels {
      * +-stride, sheets before/after qp, qn): alpha[i] = opacity table at
      * q[i] (linear interpolation), and the central-difference gradient
      *   g[3i..3i+2] = 0.5 (q[i+1] - q[i-1]), 0.5 (q[i+s] - q[i-s]), (qn[i] - qp[i]) / two_slab
+     * (with T->cd_wide, the x and y differences as vs_shade_tabs says)
      * at least where alpha[i] > 0: a kernel may leave g alone on a run of
      * pixels that are all transparent.  With T->alpha NULL (pre-integration
      * classifies the segment instead), alpha is left alone and g is written

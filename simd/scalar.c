@@ -76,8 +76,14 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
 {
     for (int i = 0; i < n; i++) {
         if (T->alpha) alpha[i] = lookup_alpha(T, q[i]);
-        g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
-        g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
+        if (T->cd_wide > 0.0f) {
+            const float c1 = 0.5f + 2.0f * T->cd_wide, c2 = T->cd_wide;
+            g[3 * i + 0] = c1 * (q[i + 1] - q[i - 1]) - c2 * (q[i + 2] - q[i - 2]);
+            g[3 * i + 1] = c1 * (q[i + stride] - q[i - stride]) - c2 * (q[i + 2 * stride] - q[i - 2 * stride]);
+        } else {
+            g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
+            g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
+        }
         g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
     }
 }

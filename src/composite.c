@@ -9,11 +9,11 @@ int vs_composite_sheet(const tile_ctx *t, const spans *sp, float *acc, shade_buf
     int total = 0;
     for (int y = sp->y0; y < sp->y1; y++) {
         if (sp->xa[y] == sp->xb[y]) continue;
-        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        int o = vs_own(t, sp->xa[y], y);
         const int crossed = F->kern.composite(acc + 4 * o, sb.alpha + o, sb.g + 3 * o, sp->xb[y] - sp->xa[y], thr);
         if (crossed) {
             total += crossed;
-            if (y - 1 < *first_row) *first_row = y - 1;
+            if (y - t->seam < *first_row) *first_row = y - t->seam;
         }
     }
     return total;

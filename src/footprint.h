@@ -73,6 +73,11 @@ static inline vs_footprint vs_footprint_scaled(const vs_footprint *fp, float s)
 }
 void vs_footprint_free(vs_footprint *fp);
 
+/* Post-cd's weight of the four-point in-sheet differences for this
+ * footprint (simd/kernels.h vs_shade_tabs cd_wide): 1/12 when voxels lie at
+ * most 0.8 pixel apart on the image, 0 from 0.9 pixel, linear between. */
+float vs_cd_wide(const vs_footprint *fp);
+
 /* exp(-t) from a table of n entries, scale entries per unit of t >= 0 (the
  * SIMD kernels' reference reads it through this too). */
 static inline float vs_exp_lookup(const float *table, int n, float scale, float t)

@@ -92,6 +92,10 @@ typedef struct vs_frame {
     int *tile_order;                 /* tasks in order of estimated work, largest
                                         first (results do not depend on it)     */
     double pad_x, pad_y;             /* footprint half-extent + seam, pixels     */
+    float cd_wide;                   /* post-cd: weight of the four-point in-sheet
+                                        differences (vs_shade_tabs), 0: none   */
+    int seam_px;                     /* tile buffers' seam each side: the reach
+                                        of the in-sheet differences (1 or 2)   */
 
     float *image;                    /* width*height*4 straight RGBA output      */
     atomic_int cancel;

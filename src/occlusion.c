@@ -41,7 +41,7 @@ uint64_t vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, flo
     uint64_t vis = 0;
     for (int y = r->y0; y < r->y1; y++) {
         if (r->xa[y] == r->xb[y]) continue;
-        const int o = (y - 1) * t->tw + (r->xa[y] - 1);
+        const int o = vs_own(t, r->xa[y], y);
         const float *restrict a = acc + 4 * o + 3;
         float *restrict al = alpha + o;
         const int n = r->xb[y] - r->xa[y];
@@ -80,7 +80,7 @@ uint64_t vs_count_visible(const tile_ctx *t, const spans *r, const float *alpha)
 {
     uint64_t vis = 0;
     for (int y = r->y0; y < r->y1; y++) {
-        const float *al = alpha + (y - 1) * t->tw + (r->xa[y] - 1);
+        const float *al = alpha + vs_own(t, r->xa[y], y);
         int v = 0;
         for (int i = 0; i < r->xb[y] - r->xa[y]; i++) v += al[i] > 0.0f;
         vis += (uint64_t)v;
@@ -92,12 +92,13 @@ uint64_t vs_count_visible(const tile_ctx *t, const spans *r, const float *alpha)
  * composited: in each row, the columns between the first and last pixel
  * not yet fully opaque (live).  Opaque runs at a row's ends are common
  * behind a surface; skip_opaque still drops those inside the span. */
-void vs_shaded_spans(const rect *r, const int *live0, const int *live1, spans *sp)
+void vs_shaded_spans(const rect *r, const int *live0, const int *live1, int seam, spans *sp)
 {
     sp->y0 = r->y0;
     sp->y1 = r->y1;
     for (int y = r->y0; y < r->y1; y++) {
-        const int a = live0[y - 1] + 1, b = live1[y - 1] + 1; /* own pixel x is buffer pixel x + 1 */
+        /* own pixel x is buffer pixel x + seam */
+        const int a = live0[y - seam] + seam, b = live1[y - seam] + seam;
         sp->xa[y] = a > r->x0 ? a : r->x0;
         sp->xb[y] = b < r->x1 ? b : r->x1;
         if (sp->xb[y] < sp->xa[y]) sp->xb[y] = sp->xa[y];

@@ -42,7 +42,7 @@ uint64_t vs_skip_opaque(const tile_ctx *t, const spans *r, const float *acc, flo
 /* The same count without occlusion. */
 uint64_t vs_count_visible(const tile_ctx *t, const spans *r, const float *alpha);
 /* The part of the touched rectangle r to classify, shade and composite. */
-void vs_shaded_spans(const rect *r, const int *live0, const int *live1, spans *sp);
+void vs_shaded_spans(const rect *r, const int *live0, const int *live1, int seam, spans *sp);
 /* Shrink own row y's live columns past pixels that became opaque. */
 void vs_shrink_live(const tile_ctx *t, const float *acc, int y, int *live0, int *live1);
 

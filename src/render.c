@@ -418,8 +418,13 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     F.tiles_x = (W + F.tile - 1) / F.tile;
     F.tiles_y = (H + F.tile - 1) / F.tile;
     F.ntiles = F.tiles_x * F.tiles_y;
-    F.pad_x = F.fp.rx + 1.0; /* + the one-pixel seam for central differences */
-    F.pad_y = F.fp.ry + 1.0;
+    F.cd_wide = s->pipeline != VS_PIPELINE_POST_CD ? 0.0f
+                : s->cd_stencil == 2      ? 0.0f
+                : s->cd_stencil == 4      ? 1.0f / 12.0f
+                                          : vs_cd_wide(&F.fp);
+    F.seam_px = F.cd_wide > 0.0f ? 2 : 1;
+    F.pad_x = F.fp.rx + F.seam_px; /* + the seam the in-sheet differences read */
+    F.pad_y = F.fp.ry + F.seam_px;
     size_t nb = F.rel->nbricks;
     F.bview = malloc((nb ? nb : 1) * sizeof *F.bview);
     F.tile_start = calloc((size_t)F.ntiles + 1, sizeof(uint32_t));

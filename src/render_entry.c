@@ -48,6 +48,8 @@ static vs_status check_settings(vs_context *ctx, const vs_settings *s)
                             s->lod_pixels);
     if (s->resample < -1 || s->resample > 1)
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "resample must be -1 (auto), 0 or 1");
+    if (s->cd_stencil != 0 && s->cd_stencil != 2 && s->cd_stencil != 4)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "cd_stencil %d must be 0 (auto), 2 or 4", s->cd_stencil);
     return VS_OK;
 }
 

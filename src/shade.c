@@ -153,7 +153,7 @@ void vs_perspective_opacity(const tile_ctx *t, const spans *r, float *alpha)
     const vs_camera *cam = &t->F->cam;
     for (int y = r->y0; y < r->y1; y++)
         for (int x = r->xa[y]; x < r->xb[y]; x++) {
-            float *a = alpha + (y - 1) * t->tw + (x - 1);
+            float *a = alpha + vs_own(t, x, y);
             if (!(*a > 0.0f && *a < 1.0f)) continue;
             const float len = (float)vs_camera_ray_length(cam, x + t->ox, y + t->oy);
             *a = 1.0f - powf(1.0f - *a, len);
@@ -168,7 +168,7 @@ void vs_shade_post_lut(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const int ch = F->stages->ch;
     for (int y = sp->y0; y < sp->y1; y++) {
         if (sp->xa[y] == sp->xb[y]) continue;
-        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        int o = vs_own(t, sp->xa[y], y);
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.shade_lut(sb.g + 3 * o, sb.alpha + o, sv->q + ch * b, ch, sp->xb[y] - sp->xa[y], sv->tabs);
     }
@@ -182,7 +182,7 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const int ch = F->stages->ch;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
+            int o = vs_own(t, x, y);
             size_t b = (size_t)y * t->stride + x;
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;
@@ -204,7 +204,7 @@ void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const float *q = sv->q;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
+            int o = vs_own(t, x, y);
             size_t b = (size_t)y * t->stride + x;
             float a = sb.alpha[o];
             if (!(a > 0.0f)) continue;
@@ -238,7 +238,7 @@ void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     vs_post_alpha_eye(F, &d0, &s0);
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
+            int o = vs_own(t, x, y);
             size_t b = (size_t)y * t->stride + x;
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;

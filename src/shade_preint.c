@@ -167,7 +167,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x0 = sp->xa[y]; x0 < sp->xb[y]; x0 += CHUNK) {
             const int n = sp->xb[y] - x0 < CHUNK ? sp->xb[y] - x0 : CHUNK;
-            const int o0 = (y - 1) * t->tw + (x0 - 1);
+            const int o0 = vs_own(t, x0, y);
             const size_t b0 = (size_t)y * t->stride + x0;
             const float *al = sb.alpha + o0;
             int live = 0;
@@ -253,7 +253,7 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
     vs_post_alpha_eye(F, &d0, &s0);
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            const int o = (y - 1) * t->tw + (x - 1);
+            const int o = vs_own(t, x, y);
             const size_t b = 4 * ((size_t)y * t->stride + x);
             if (!(sb.alpha[o] > 0.0f)) continue;
             const float *q = sv->q + b, *qn = sv->next + b;

@@ -26,7 +26,7 @@ static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
             int inside = 1;
             for (int a = 0; a < 3; a++)
                 inside &= idx[a] >= lo[a] && (open[a] ? idx[a] < hi[a] : idx[a] <= hi[a]);
-            if (!inside) alpha[(y - 1) * t->tw + (x - 1)] = 0.0f;
+            if (!inside) alpha[vs_own(t, x, y)] = 0.0f;
         }
 }
 
@@ -45,7 +45,7 @@ static void perspective_gradients(const tile_ctx *t, int k, const spans *r, cons
     for (int y = r->y0; y < r->y1; y++) {
         const float v = (float)((y + t->oy) - cam->cy);
         for (int x = r->xa[y]; x < r->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
+            int o = vs_own(t, x, y);
             if (!(alpha[o] > 0.0f)) continue;
             vs_perspective_gradient(g + 3 * o, sk, (float)((x + t->ox) - cam->cx), v, cz);
         }
@@ -69,7 +69,7 @@ uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf 
     const spans *sp = sv->sp;
     for (int y = sp->y0; y < sp->y1; y++) {
         if (sp->xa[y] == sp->xb[y]) continue;
-        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        int o = vs_own(t, sp->xa[y], y);
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, sv->q + b, sv->prev + b, sv->next + b, t->stride,
                             sp->xb[y] - sp->xa[y], sv->tabs);
@@ -89,7 +89,7 @@ uint64_t vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf 
     const spans *sp = sv->sp;
     for (int y = sp->y0; y < sp->y1; y++) {
         if (sp->xa[y] == sp->xb[y]) continue;
-        int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+        int o = vs_own(t, sp->xa[y], y);
         size_t b = (size_t)y * t->stride + sp->xa[y];
         F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, sv->q + 4 * b, sp->xb[y] - sp->xa[y], sv->tabs);
         if (F->preint)
@@ -105,7 +105,7 @@ uint64_t vs_classify_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const spans *sp = sv->sp;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
+            int o = vs_own(t, x, y);
             size_t b = (size_t)y * t->stride + x;
             sb.alpha[o] = sv->q[4 * b + 3];
         }
@@ -121,7 +121,7 @@ uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_b
     if (F->preint) {
         for (int y = sp->y0; y < sp->y1; y++) {
             if (sp->xa[y] == sp->xb[y]) continue;
-            const int o = (y - 1) * t->tw + (sp->xa[y] - 1);
+            const int o = vs_own(t, sp->xa[y], y);
             const size_t b = 4 * ((size_t)y * t->stride + sp->xa[y]) + 3; /* the density */
             vs_preint_alpha_row_cd(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b,
                                    sv->next + b, 4, sp->xb[y] - sp->xa[y]);
@@ -130,7 +130,7 @@ uint64_t vs_classify_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_b
     }
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x = sp->xa[y]; x < sp->xb[y]; x++) {
-            int o = (y - 1) * t->tw + (x - 1);
+            int o = vs_own(t, x, y);
             size_t b = (size_t)y * t->stride + x;
             sb.alpha[o] = vs_classify_lookup(F->cls, F->alpha_corr, sv->q[4 * b + 3] + (float)F->base);
         }

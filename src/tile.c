@@ -1,6 +1,6 @@
 /* The per-tile sheet loop (paper §2 and §4): for each image-aligned sheet,
  * front to back, the voxels that reach it are splatted into the tile's
- * sheet buffer (which has a one-pixel seam for central differences), then
+ * sheet buffer (which has a seam of the pixels central differences read), then
  * the touched part of the sheet is classified, shaded and composited, and
  * the tile's occlusion map (its accumulated opacity) updated.  The stages
  * live in their own files (activate.c, rasterize.c, sheet_classify.c,
@@ -104,10 +104,11 @@ void vs_tile_render(void *arg, int worker, int task)
     t.y0 = ty * T;
     t.tw = (t.x0 + T > W ? W : t.x0 + T) - t.x0;
     t.th = (t.y0 + T > F->cam.height ? F->cam.height : t.y0 + T) - t.y0;
-    t.bw = t.tw + 2;
-    t.bh = t.th + 2;
-    t.ox = t.x0 - 1;
-    t.oy = t.y0 - 1;
+    t.seam = F->seam_px;
+    t.bw = t.tw + 2 * t.seam;
+    t.bh = t.th + 2 * t.seam;
+    t.ox = t.x0 - t.seam;
+    t.oy = t.y0 - t.seam;
     {
         double det = (double)F->fp.A * F->fp.C - (double)F->fp.B * F->fp.B;
         t.ry0 = (float)sqrt(F->fp.emax * F->fp.A / det);
@@ -247,7 +248,7 @@ void vs_tile_render(void *arg, int worker, int task)
     /* slot of sheet k: (k - kbase) % R, never negative from the first
      * sheet the loop opens */
     const int kbase = kmin - lead;
-    const rect own = {1, 1, t.tw + 1, t.th + 1};
+    const rect own = {t.seam, t.seam, t.tw + t.seam, t.th + t.seam};
     int next_brick = 0;
 
     /* sheet k is shaded once sheet k + ahead is complete */
@@ -297,13 +298,14 @@ void vs_tile_render(void *arg, int worker, int task)
         if (!rect_empty(&r)) {
             ws->tiles_shaded++;
             spans sp = {.xa = span_xa, .xb = span_xb};
-            vs_shaded_spans(&r, live0, live1, &sp);
+            vs_shaded_spans(&r, live0, live1, t.seam, &sp);
             /* the tables the post-shaded kernels read (a few stores a sheet) */
             /* pre-integration classifies the segment (sheet_classify.c):
              * the kernels then take the gradients only */
             const vs_shade_tabs tabs = {.vmin = F->cls->vmin - F->base, .scale = F->cls->scale,
                                         .alpha = F->preint ? NULL : F->alpha_corr, .alpha_zero_x = F->alpha_zero_x,
                                         .color = &F->cls->color[0][0], .slab = slab, .two_slab = 2.0f * slab,
+                                        .cd_wide = F->cd_wide,
                                         .ppm = (float)F->cam.px_per_mm, .zpm = (float)F->cam.z_per_mm,
                                         .nl = F->lut.nl, .lambda_bin = F->lut.lambda_bin, .radius = F->lut.radius,
                                         .phi_bin = F->lut.phi_bin, .diffuse = F->lut.diffuse,
@@ -326,7 +328,7 @@ void vs_tile_render(void *arg, int worker, int task)
             const double tc = tr ? vs_now_ms() : 0.0;
             if (s->occlusion) {
                 for (int y = sp.y0; y < sp.y1; y++)
-                    if (sp.xa[y] != sp.xb[y]) vs_shrink_live(&t, acc, y - 1, live0, live1);
+                    if (sp.xa[y] != sp.xb[y]) vs_shrink_live(&t, acc, y - t.seam, live0, live1);
                 if (sat_from < t.th) {
                     /* rows above the first changed one keep their sums */
                     vs_build_sat(&t, acc, thr, sat, sat_from);

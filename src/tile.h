@@ -49,7 +49,10 @@ typedef struct tile_ctx {
     const vs_frame *F;
     const vs_footprint *fp;
     int x0, y0, tw, th;  /* own pixels in image coordinates                 */
-    int bw, bh;          /* buffer size: own pixels plus a one-pixel seam    */
+    int seam;            /* pixels of seam each side: what the in-sheet
+                            differences read past the own pixels (1, or 2
+                            with post-cd's four-point stencil)              */
+    int bw, bh;          /* buffer size: own pixels plus the seam            */
     int stride;          /* pixels per buffer row: bw plus an apron of
                             VS_APRON pixels each side, which footprint
                             blocks may spill into (cleared, never shaded)   */
@@ -59,6 +62,10 @@ typedef struct tile_ctx {
     float *ex;           /* scratch: one footprint row of weights (bw)       */
     vs_worker_stats *ws; /* the worker's counters                            */
 } tile_ctx;
+
+/* Own pixel (x, y) of the buffer's coordinates in the tile's per-pixel
+ * arrays (opacity, colour, accumulated image). */
+static inline int vs_own(const tile_ctx *t, int x, int y) { return (y - t->seam) * t->tw + (x - t->seam); }
 
 static inline void rect_grow(rect *bb, int xa, int xb, int y)
 {

@@ -80,6 +80,8 @@ expect_err "--trace" "a trace over the output image names the option"
 expect_fail 1 "--isa mmx" render "${SCENE[@]}" --isa mmx -o a.png
 expect_fail 1 "--resample sometimes" render "${SCENE[@]}" --resample sometimes -o a.png
 expect_err "--resample" "a bad --resample names the option"
+expect_fail 1 "--cd-stencil 3" render "${SCENE[@]}" --cd-stencil 3 -o a.png
+expect_err "--cd-stencil" "a bad --cd-stencil names the option"
 expect_fail 1 "--view 1" render "${SCENE[@]}" --view 1 -o a.png
 expect_fail 1 "--view 0,1e7" render "${SCENE[@]}" --view 0,1e7 -o a.png
 expect_fail 1 "--material 1,1" render "${SCENE[@]}" --material 1,1 -o a.png

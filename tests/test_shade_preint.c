@@ -186,7 +186,7 @@ static void run(const vs_preint *P, int gs, int exact, int persp)
     R->tabs = (vs_shade_tabs){.slab = 0.37f, .two_slab = 2.0f * 0.37f, .ppm = 1.3f, .zpm = 0.7f, .nl = lut.nl,
                               .lambda_bin = lut.lambda_bin, .radius = lut.radius, .phi_bin = lut.phi_bin,
                               .diffuse = lut.diffuse, .specular = lut.specular};
-    R->t = (tile_ctx){.F = F, .tw = TW, .th = TH, .bw = SW, .bh = SH, .stride = STRIDE, .ox = 3, .oy = -2};
+    R->t = (tile_ctx){.F = F, .seam = 1, .tw = TW, .th = TH, .bw = SW, .bh = SH, .stride = STRIDE, .ox = 3, .oy = -2};
     R->sp = (spans){1, TH + 1, R->xa, R->xb};
     for (int y = 1; y <= TH; y++) { /* uneven spans, one row empty */
         R->xa[y] = 1 + (y % 3) * 5;

@@ -250,27 +250,30 @@ static float gcomp(void)
     }
 }
 
-/* step 1 of post-cd: a 3-row density sheet and its neighbours; the
- * outputs' guard floats must not change */
+/* step 1 of post-cd: a 5-row density sheet and its neighbours, with the
+ * two-point in-sheet differences, the four-point ones and a mix (rep 2,
+ * 3); the outputs' guard floats must not change */
 static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fixture *F)
 {
     enum { S = MAXN + 2 * PAD, NPIX = MAXN + PAD };
-    float q[3 * S], qp[3 * S], qn[3 * S];
+    static const float wide[4] = {0.0f, 0.0f, 1.0f / 12.0f, 0.03125f};
+    float q[5 * S], qp[5 * S], qn[5 * S];
     float ar[NPIX], ao[NPIX], gr[3 * NPIX], go[3 * NPIX], g0[3 * NPIX];
     int cases = 0;
     for (int n = 0; n <= MAXN; n++)
         for (int off = 0; off < 4; off++)
             for (int rep = 0; rep < 4; rep++)
                 for (int var = 0; var < 3; var++) {
-                    const vs_shade_tabs T = classify_tabs(F, var);
-                    for (int i = 0; i < 3 * S; i++) {
+                    vs_shade_tabs T = classify_tabs(F, var);
+                    T.cd_wide = wide[rep];
+                    for (int i = 0; i < 5 * S; i++) {
                         q[i] = var == 1 ? low_density() : density();
                         qp[i] = rep == 1 ? q[i] : density(); /* rep 1: zero z gradient */
                         qn[i] = density();
                     }
                     for (int i = 0; i < NPIX; i++) ar[i] = ao[i] = frand();
                     for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
-                    const int b = S + PAD / 2 + off; /* middle row, unaligned */
+                    const int b = 2 * S + PAD / 2 + off; /* middle row, unaligned */
                     vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, S, n, &T);
                     fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, S, n, &T);
                     if (!classified_agree("classify_cd", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
@@ -278,6 +281,45 @@ static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fix
                 }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_cd", isa, cases);
     return 1;
+}
+
+/* The reference's in-sheet differences against the derivative itself: on
+ * the cubic q = x^3 - 2 y^3 + xy / 2 the four-point stencil (cd_wide 1/12)
+ * is exact, the two-point one is off by 1 in x and 2 in y (h^2 q'''/6), a
+ * mix by the mix's share of that; a linear sheet is exact for any weight. */
+static void check_cd_reference(const shade_fixture *F)
+{
+    enum { S = 16 };
+    float q[9 * S], lin[9 * S], qz[9 * S], g[3 * 4];
+    for (int y = 0; y < 9; y++)
+        for (int x = 0; x < S; x++) {
+            const float u = (float)(x - 8), v = (float)(y - 4);
+            q[y * S + x] = u * u * u - 2.0f * v * v * v + 0.5f * u * v;
+            lin[y * S + x] = 3.0f * u - 5.0f * v + 7.0f;
+            qz[y * S + x] = 0.0f;
+        }
+    static const float wide[3] = {0.0f, 1.0f / 12.0f, 1.0f / 24.0f};
+    for (int w = 0; w < 3; w++) {
+        vs_shade_tabs T = F->T;
+        T.alpha = NULL;
+        T.cd_wide = wide[w];
+        const int b = 4 * S + 6; /* pixels (u, v) = (-2..1, 0) */
+        vs_classify_cd_scalar(NULL, g, q + b, qz + b, qz + b, S, 4, &T);
+        const float share = 1.0f - 12.0f * wide[w]; /* of the two-point error */
+        for (int i = 0; i < 4; i++) {
+            const float u = (float)(i - 2), v = 0.0f;
+            const float ex = 3.0f * u * u + 0.5f * v + share, ey = -6.0f * v * v + 0.5f * u - 2.0f * share;
+            CHECK(fabsf(g[3 * i] - ex) < 1e-5f && fabsf(g[3 * i + 1] - ey) < 1e-5f,
+                  "in-sheet differences (weight %g) at u=%g: %g %g, expected %g %g", (double)wide[w], (double)u,
+                  (double)g[3 * i], (double)g[3 * i + 1], (double)ex, (double)ey);
+        }
+        vs_classify_cd_scalar(NULL, g, lin + b, qz + b, qz + b, S, 4, &T);
+        for (int i = 0; i < 4; i++)
+            CHECK(fabsf(g[3 * i] - 3.0f) < 1e-5f && fabsf(g[3 * i + 1] + 5.0f) < 1e-5f,
+                  "in-sheet differences (weight %g) of a linear sheet: %g %g", (double)wide[w], (double)g[3 * i],
+                  (double)g[3 * i + 1]);
+    }
+    printf("classify_cd   scalar  in-sheet differences: 4-point exact on a cubic, mixes by their share\n");
 }
 
 /* step 1 of post-gs: (density, gradient splats) per pixel; densities as
@@ -1031,6 +1073,7 @@ int main(void)
     check_block("scalar", vs_splat_block_scalar);
     static shade_fixture fx;
     fixture_init(&fx);
+    check_cd_reference(&fx);
     CHECK(!check_classify(NULL, classify_off, &fx), "check_classify cannot tell a wrong kernel from the reference");
     CHECK(!check_classify_gs(NULL, classify_gs_off, &fx),
           "check_classify_gs cannot tell a wrong kernel from the reference");

@@ -80,7 +80,7 @@ enum opt_id {
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
     O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
-    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD, O_RESAMPLE
+    O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD, O_RESAMPLE, O_CD_STENCIL
 };
 
 typedef struct opt_def {
@@ -127,6 +127,7 @@ static const opt_def opt_table[] = {
     {"--normal-lut", 1, O_NORMAL_LUT, 0},
     {"--preintegration", 0, O_PREINT, 0},
     {"--no-preintegration", 0, O_NO_PREINT, 0},
+    {"--cd-stencil", 1, O_CD_STENCIL, 0},
     {"--lod", 1, O_LOD, 0},
     {"--no-lod", 0, O_NO_LOD, 0},
     {"--resample", 1, O_RESAMPLE, 0},
@@ -380,6 +381,12 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_EXACT_N: s->exact_normals = 1; return 0;
     case O_PREINT: s->preintegration = 1; return 0;
     case O_NO_PREINT: s->preintegration = 0; return 0;
+    case O_CD_STENCIL:
+        if (!strcmp(v, "auto")) s->cd_stencil = 0;
+        else if (!strcmp(v, "2")) s->cd_stencil = 2;
+        else if (!strcmp(v, "4")) s->cd_stencil = 4;
+        else return fail(err, cap, "--cd-stencil: expected auto, 2 or 4, got '%s'", v);
+        return 0;
     case O_LOD: return parse_range_double(n, v, 0.0, 1e6, 0, &s->lod_pixels, err, cap);
     case O_NO_LOD: s->lod_pixels = 0.0; return 0;
     case O_RESAMPLE:
@@ -648,6 +655,9 @@ void cli_render_usage(FILE *f)
             "  --no-preintegration    classify each sheet alone (default: post-cd, -gs, -alpha classify\n"
             "                         the segment to the next sheet, pre-integrated, when the\n"
             "                         classification is translucent; --preintegration always)\n"
+            "  --cd-stencil auto|2|4  post-cd's differences within a sheet: 2 the paper's central\n"
+            "                         differences, 4 a four-point stencil (auto: four-point where\n"
+            "                         voxels lie under 0.9 pixel apart on the image, see vsplat(1))\n"
             "leaving out work:\n"
             "  --lod PX               levels of detail: splat a filtered copy of the volume whose\n"
             "                         voxels lie at most PX pixels apart (default 1)\n"

@@ -364,7 +364,9 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
     **settings  any other field of vs_settings (vsplat.h) by name, e.g.
               slab=0.5, exact_normals=True, occlusion=False, tile_size=32,
               lod_pixels=0 (full resolution however small the volume is seen),
-              resample=0 (anisotropic voxels splatted as stored)
+              resample=0 (anisotropic voxels splatted as stored),
+              cd_stencil=2 (post-cd: the paper's two-point differences
+              at any size; 4 the four-point stencil; 0 auto)
 
     The GIL is released while the frame renders.
     """

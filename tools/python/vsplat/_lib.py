@@ -60,6 +60,7 @@ class Settings(ctypes.Structure):
         ("preintegration", c_int),
         ("lod_pixels", c_double),
         ("resample", c_int),
+        ("cd_stencil", c_int),
     ]
 
 
