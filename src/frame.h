@@ -108,6 +108,17 @@ typedef struct vs_frame {
                                         (pipeline.c)                            */
 } vs_frame;
 
+/* How far past a voxel's centre (x and y, pixels) its footprint and the
+ * tile seam reach when the footprint is seen sc times larger (perspective):
+ * the footprint scales, the seam is pixels of the tile whatever the depth.
+ * sc = 1 gives pad_x, pad_y exactly. */
+static inline void vs_frame_reach(const vs_frame *F, float sc, float *px, float *py)
+{
+    const float s1 = sc - 1.0f;
+    *px = (float)F->pad_x + (float)(F->pad_x - F->seam_px) * s1;
+    *py = (float)F->pad_y + (float)(F->pad_y - F->seam_px) * s1;
+}
+
 /* Pixels of sheet-buffer apron left and right of a tile's buffer: a
  * footprint block vector (8 floats) spills at most 7 pixels past it. */
 #define VS_APRON 8

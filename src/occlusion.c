@@ -11,7 +11,7 @@
  * footprint still reaches open pixels removes density from their sheets and
  * bends their gradients (visible as rings on an opaque sphere).  So, as in
  * the occlusion test of Mueller et al. [22], we test the footprint's whole
- * extent (plus the one-pixel seam the central differences read): a voxel is
+ * extent (plus the seam the in-sheet differences read): a voxel is
  * culled only if every pixel of the tile it can affect is opaque.  A
  * summed-area table of the tile's opaque pixels answers that in O(1); it is
  * rebuilt from row `from` on, the first whose opaque pixels changed. */

@@ -28,8 +28,9 @@ static inline int box_occluded_pad(const tile_ctx *t, const int *sat, float x0, 
 /* The same with the frame's footprint reach scaled by sc. */
 static inline int box_occluded(const tile_ctx *t, const int *sat, float x0, float x1, float y0, float y1, float sc)
 {
-    const vs_frame *F = t->F;
-    return box_occluded_pad(t, sat, x0, x1, y0, y1, (float)F->pad_x * sc, (float)F->pad_y * sc);
+    float px, py;
+    vs_frame_reach(t->F, sc, &px, &py);
+    return box_occluded_pad(t, sat, x0, x1, y0, y1, px, py);
 }
 
 

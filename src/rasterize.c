@@ -18,7 +18,7 @@ sheet_geom vs_sheet_geom(const vs_frame *F, int k)
 }
 
 /* Row range of a footprint inside the buffer (buffer row y is image row
- * y + oy, oy = y0 - 1). */
+ * y + oy, oy = y0 - seam). */
 static inline int rows_of(const tile_ctx *t, const section *sec, int *ya, int *yb)
 {
     const float ry = t->ry0 * sec->sc;

@@ -25,13 +25,14 @@ typedef struct bin_job {
 } bin_job;
 
 /* Tiles that a box of voxel centres [x0,x1] x [y0,y1] can reach with its
- * footprints (and the central-difference seam), footprints scaled by at
- * most sc (perspective). */
+ * footprints (and the seam the in-sheet differences read), footprints
+ * scaled by at most sc (perspective). */
 static inline int tile_range(const vs_frame *F, float x0, float x1, float y0, float y1, float sc, int *tx0,
                              int *tx1, int *ty0, int *ty1)
 {
     const int W = F->cam.width, H = F->cam.height;
-    const float px = (float)F->pad_x * sc, py = (float)F->pad_y * sc;
+    float px, py;
+    vs_frame_reach(F, sc, &px, &py);
     if (!(x1 + px >= 0.0f) || !(x0 - px <= (float)(W - 1)) || !(y1 + py >= 0.0f) || !(y0 - py <= (float)(H - 1)))
         return 0; /* off screen (also rejects NaN) */
     int a = (int)floorf((x0 - px) / (float)F->tile);

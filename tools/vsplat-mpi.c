@@ -243,7 +243,8 @@ static int render_single(vs_context *ctx, const vs_volume *vol, const cli_opts *
 
 /* Voxels a brick needs beyond the ones it owns, so that every sheet point
  * it composites, and the neighbours its gradient reads (one pixel in the
- * sheet, one sheet across), see all the voxels whose kernel reaches them,
+ * sheet, two where post-cd takes its four-point stencil, one sheet
+ * across), see all the voxels whose kernel reaches them,
  * and those voxels the neighbours their own gradient reads (two voxels:
  * pre-shaded pipelines, src/voxel_gradient.h).
  * A pixel spans more than a voxel when zoomed out; perspective doubles the
@@ -255,7 +256,13 @@ static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3]
         if (d[a] * sp[a] > extent) extent = d[a] * sp[a];
         if (sp[a] < unit) unit = sp[a];
     }
-    double px_mm = extent / (s->zoom * s->width), step_mm = px_mm > s->slab * unit ? px_mm : s->slab * unit;
+    double px_mm = extent / (s->zoom * s->width);
+    /* post-cd's four-point stencil (src/footprint.c vs_cd_wide): below 0.9
+     * pixel a voxel, anywhere on a perspective view's far side */
+    const int wide = s->pipeline == VS_PIPELINE_POST_CD &&
+                     (s->cd_stencil == 4 || (s->cd_stencil == 0 && (unit < 0.9 * px_mm || s->perspective_fov > 0)));
+    if (wide) px_mm *= 2.0;
+    const double step_mm = px_mm > s->slab * unit ? px_mm : s->slab * unit;
     double reach = ceil(step_mm / unit) * (s->perspective_fov > 0 ? 2 : 1);
     return (int)ceil(s->kernel_radius) + 2 + (int)(reach < 64 ? reach : 64);
 }
