@@ -582,9 +582,29 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
     vs_volume_release(v);
 }
 
-/* Perspective, close up: the post-cd silhouette of the sphere has the
- * analytic radius f R / sqrt(D^2 - R^2) (eye distance D, focal length f in
- * pixels), 10 % larger than the orthographic f R / D. */
+/* post-cd's four-point weight (footprint.h vs_cd_wide) on footprints of m
+ * pixels a voxel (Qxx = a / m^2, and one stretched 2x along a diagonal:
+ * its narrowest direction counts) */
+static void test_cd_wide_rule(void)
+{
+    const double ms[4] = {0.7, 0.85, 0.95, 0.425};
+    const float want[4] = {1.0f / 12.0f, 0.5f / 12.0f, 0.0f, 1.0f / 12.0f};
+    for (int i = 0; i < 4; i++) {
+        vs_footprint fp;
+        memset(&fp, 0, sizeof fp);
+        fp.a = 2.0 * M_LN2;
+        const double q = fp.a / (ms[i] * ms[i]);
+        fp.A = fp.C = (float)q;
+        if (i == 3) { /* eigenvalues q and q/16 (m 0.425 and 1.7) */
+            fp.A = fp.C = (float)(0.5 * (q + q / 16));
+            fp.B = (float)(0.5 * (q - q / 16));
+        }
+        const float w = vs_cd_wide(&fp);
+        CHECK(fabsf(w - want[i]) < 1e-5f, "vs_cd_wide at %.3f pixel a voxel: %g, expected %g", ms[i], (double)w,
+              (double)want[i]);
+    }
+}
+
 /* Seen small, a sheet carries detail near its pixels' limit, where the
  * two-point in-sheet difference falls short of the derivative; post-cd
  * mixes in the four-point stencil there (footprint.h vs_cd_wide).  The
@@ -601,26 +621,6 @@ static void test_wide_differences(void)
     s.width = s.height = 128;
     s.azimuth = 20;
     s.elevation = 15;
-    /* the rule on footprints of m pixels a voxel (Qxx = a / m^2, and one
-     * stretched 2x along a diagonal: its narrowest direction counts) */
-    {
-        const double ms[4] = {0.7, 0.85, 0.95, 0.425};
-        const float want[4] = {1.0f / 12.0f, 0.5f / 12.0f, 0.0f, 1.0f / 12.0f};
-        for (int i = 0; i < 4; i++) {
-            vs_footprint fp;
-            memset(&fp, 0, sizeof fp);
-            fp.a = 2.0 * M_LN2;
-            const double q = fp.a / (ms[i] * ms[i]);
-            fp.A = fp.C = (float)q;
-            if (i == 3) { /* eigenvalues q and q/16 (m 0.425 and 1.7) */
-                fp.A = fp.C = (float)(0.5 * (q + q / 16));
-                fp.B = (float)(0.5 * (q - q / 16));
-            }
-            const float w = vs_cd_wide(&fp);
-            CHECK(fabsf(w - want[i]) < 1e-5f, "vs_cd_wide at %.3f pixel a voxel: %g, expected %g", ms[i], (double)w,
-                  (double)want[i]);
-        }
-    }
     s.pipeline = VS_PIPELINE_RAYCAST;
     s.ray_step = 0.05;
     s.ray_analytic = 1;
@@ -651,6 +651,9 @@ static void test_wide_differences(void)
     vs_volume_release(v);
 }
 
+/* Perspective, close up: the post-cd silhouette of the sphere has the
+ * analytic radius f R / sqrt(D^2 - R^2) (eye distance D, focal length f in
+ * pixels), 10 % larger than the orthographic f R / D. */
 static void test_perspective_silhouette(void)
 {
     vs_volume *v = tu_scene(ctx, "sphere");
@@ -920,6 +923,7 @@ int main(void)
      * left is what splatting approximates (slabs, tables, gradients) */
     test_against_raycaster("ml", 0, 128, 0.0, 20.0);
     test_against_raycaster("ml", 0, 128, 30.0, 20.0);
+    test_cd_wide_rule();
     test_wide_differences();
     vs_context_release(ctx);
     TEST_DONE();
