@@ -22,7 +22,8 @@ typedef struct kernel_entry {
                  12 place_voxels (n voxels in batches of 16),
                  13 splat_voxel_gs (as splat_voxel4, with the gradient layout),
                  14 splat_rows_mix (8 rows of the gradient layout, mixed, into one sheet),
-                 15 shade_terms (n dense gradients), 16 preint_alpha (n segments in two halves) */
+                 15 shade_terms (n dense gradients), 16 preint_alpha (n segments in two halves),
+                 17 classify_cd with the four-point in-sheet stencil (cd_wide 1/12) */
     void *fn;
 } kernel_entry;
 
@@ -31,18 +32,18 @@ typedef struct kernel_entry {
 enum { BLOCK_ROWS = 8, BLOCK_DS = 200, SHEET_STEP = BLOCK_ROWS * BLOCK_DS + 64 /* splat_voxel1: 4 sheets */ };
 static int block_nvec(int n) { return n < 8 ? 1 : n / 8; }
 
-/* Post-shaded sheet kernels: a density sheet of 3 rows of SHEET_S floats
+/* Post-shaded sheet kernels: a density sheet of 5 rows of SHEET_S floats
  * (and the sheets before and after) with values across the opacity ramp,
  * gradients of random direction (pessimistic for the table gathers: on a
  * real sheet neighbours have similar normals), a third of the pixels
  * visible, and synthetic tables of the real sizes (nl = 64). */
 enum { SHEET_S = 256, SHADE_NL = 64, SHADE_NP = SHADE_NL / 2 + 1 };
 typedef struct shade_bench {
-    float q[3 * SHEET_S], qp[3 * SHEET_S], qn[3 * SHEET_S], alpha[SHEET_S], g[3 * SHEET_S], g0[3 * SHEET_S];
+    float q[5 * SHEET_S], qp[3 * SHEET_S], qn[3 * SHEET_S], alpha[SHEET_S], g[3 * SHEET_S], g0[3 * SHEET_S];
     float atab[VS_KTAB], color[3 * VS_KTAB], diffuse[SHADE_NP * SHADE_NL], specular[SHADE_NP * SHADE_NL];
     uint16_t lambda_bin[255 * 255 + 2], phi_bin[255 * 181 + 2];
     uint8_t radius[255 * 255 + 4];
-    vs_shade_tabs T;
+    vs_shade_tabs T, T4; /* T4: T with the four-point stencil */
     /* project_brick: a brick's offsets in the order the list stores them,
      * a 45-degree view, a window that keeps about a third of the voxels */
     uint16_t vox[VS_PROJECT_MAX], keep[VS_PROJECT_MAX];
@@ -109,6 +110,9 @@ static void shade_bench_init(shade_bench *B)
                            .slab = 0.5f, .two_slab = 1.0f, .ppm = 1.0f, .zpm = 1.0f, .nl = SHADE_NL,
                            .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,
                            .diffuse = B->diffuse, .specular = B->specular};
+    B->T4 = B->T;
+    B->T4.cd_wide = 1.0f / 12.0f;
+    for (int i = 3 * SHEET_S; i < 5 * SHEET_S; i++) B->q[i] = B->q[i - 3 * SHEET_S]; /* the stencil's rows */
 }
 
 /* Time `reps` calls over a buffer of rows; returns ns per element. */
@@ -138,6 +142,10 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
             case 5:
                 ((vs_classify_cd_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + SHEET_S + 1 + off,
                                            B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, SHEET_S, n, &B->T);
+                break;
+            case 17: /* two rows and two pixels each side */
+                ((vs_classify_cd_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 2 * SHEET_S + 2 + off,
+                                           B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, SHEET_S, n, &B->T4);
                 break;
             case 6:
                 /* shading overwrites the gradients: restore them now and then (a copy per call would
@@ -229,6 +237,8 @@ int bench_kernels(const bench_opts *o)
         {"splat_block_mix", VS_ISA_AVX2, 8, (void *)vs_splat_block_mix_avx2},
         {"classify_cd", VS_ISA_SCALAR, 5, (void *)vs_classify_cd_scalar},
         {"classify_cd", VS_ISA_AVX2, 5, (void *)vs_classify_cd_avx2},
+        {"classify_cd4", VS_ISA_SCALAR, 17, (void *)vs_classify_cd_scalar},
+        {"classify_cd4", VS_ISA_AVX2, 17, (void *)vs_classify_cd_avx2},
         {"classify_gs", VS_ISA_SCALAR, 7, (void *)vs_classify_gs_scalar},
         {"classify_gs", VS_ISA_AVX2, 7, (void *)vs_classify_gs_avx2},
         {"shade_lut", VS_ISA_SCALAR, 6, (void *)vs_shade_lut_scalar},
