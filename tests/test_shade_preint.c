@@ -10,7 +10,9 @@
  * - the terms it keeps for sheet k + 1 (shade_buf.term) are exact: sheet
  *   k + 1 shaded after sheet k gives bit for bit what it gives shaded
  *   alone, also at a pixel not live at sheet k, whose stored terms are
- *   older and must not be taken. */
+ *   older and must not be taken.
+ * Post-cd also with the four-point in-sheet stencil (weights 1/12 and a
+ * mix) and the two-pixel tile seam it takes. */
 #include "testutil.h"
 #include "classify.h"
 #include "frame.h"
@@ -24,7 +26,8 @@
 #include <float.h>
 #include <limits.h>
 
-enum { TW = 150, TH = 9, SW = TW + 2, SH = TH + 2, STRIDE = SW + 2 * VS_APRON, NS = 6 };
+/* buffers sized for the widest seam (2) */
+enum { TW = 150, TH = 9, SW = TW + 4, SH = TH + 4, STRIDE = SW + 2 * VS_APRON, NS = 6 };
 
 static vs_context *ctx;
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
@@ -95,8 +98,14 @@ static void expected(const rig *R, int k, int exact, int x, int y, const float g
         f = q[0];
         bk = n[0];
         m = vs_preint_mid_cd(at(R, k - 1)[b], f, bk);
-        g1[0] = 0.5f * (n[1] - n[-1]);
-        g1[1] = 0.5f * (n[STRIDE] - n[-STRIDE]);
+        const float w = R->tabs.cd_wide, c1 = 0.5f + 2.0f * w; /* simd/scalar.c's formula */
+        if (w > 0.0f) {
+            g1[0] = c1 * (n[1] - n[-1]) - w * (n[2] - n[-2]);
+            g1[1] = c1 * (n[STRIDE] - n[-STRIDE]) - w * (n[2 * STRIDE] - n[-2 * STRIDE]);
+        } else {
+            g1[0] = 0.5f * (n[1] - n[-1]);
+            g1[1] = 0.5f * (n[STRIDE] - n[-STRIDE]);
+        }
         g1[2] = (at(R, k + 2)[b] - f) / (2.0f * slab);
         const vs_camera *cam = &F->cam;
         const float u = (float)((x + R->t.ox) - cam->cx), v = (float)((y + R->t.oy) - cam->cy);
@@ -142,7 +151,7 @@ static void shade(rig *R, int k)
     vs_shade_post_preint(&R->t, &sv, sb);
 }
 
-static void run(const vs_preint *P, int gs, int exact, int persp)
+static void run(const vs_preint *P, int gs, int exact, int persp, float cd_wide)
 {
     rig *R = calloc(1, sizeof *R);
     if (!R) {
@@ -185,12 +194,14 @@ static void run(const vs_preint *P, int gs, int exact, int persp)
     }
     R->tabs = (vs_shade_tabs){.slab = 0.37f, .two_slab = 2.0f * 0.37f, .ppm = 1.3f, .zpm = 0.7f, .nl = lut.nl,
                               .lambda_bin = lut.lambda_bin, .radius = lut.radius, .phi_bin = lut.phi_bin,
-                              .diffuse = lut.diffuse, .specular = lut.specular};
-    R->t = (tile_ctx){.F = F, .seam = 1, .tw = TW, .th = TH, .bw = SW, .bh = SH, .stride = STRIDE, .ox = 3, .oy = -2};
-    R->sp = (spans){1, TH + 1, R->xa, R->xb};
-    for (int y = 1; y <= TH; y++) { /* uneven spans, one row empty */
-        R->xa[y] = 1 + (y % 3) * 5;
-        R->xb[y] = y == 4 ? R->xa[y] : TW + 1 - (y % 4) * 7;
+                              .diffuse = lut.diffuse, .specular = lut.specular, .cd_wide = cd_wide};
+    const int seam = cd_wide > 0.0f ? 2 : 1; /* as render.c sets it */
+    R->t = (tile_ctx){.F = F, .seam = seam, .tw = TW, .th = TH, .bw = TW + 2 * seam, .bh = TH + 2 * seam,
+                      .stride = STRIDE, .ox = 3, .oy = -2};
+    R->sp = (spans){seam, TH + seam, R->xa, R->xb};
+    for (int y = seam; y < TH + seam; y++) { /* uneven spans, one row empty */
+        R->xa[y] = seam + (y % 3) * 5;
+        R->xb[y] = y == 3 + seam ? R->xa[y] : TW + seam - (y % 4) * 7;
     }
     for (int k = 0; k < NS; k++) {
         const int nf = STRIDE * SH * R->ch;
@@ -231,9 +242,9 @@ static void run(const vs_preint *P, int gs, int exact, int persp)
     memcpy(g0, R->g, sizeof R->g);
     shade(R, 3);
     int formula = 1, live = 0;
-    for (int y = 1; y <= TH; y++)
+    for (int y = seam; y < TH + seam; y++)
         for (int x = R->xa[y]; x < R->xb[y]; x++) {
-            const int o = (y - 1) * TW + (x - 1);
+            const int o = vs_own(&R->t, x, y);
             if (!(R->alpha[o] > 0.0f)) continue;
             float c[3];
             expected(R, 3, exact, x, y, g0 + 3 * o, c);
@@ -241,13 +252,14 @@ static void run(const vs_preint *P, int gs, int exact, int persp)
             live++;
         }
     free(g0);
-    CHECK(formula && live > TW * TH / 2, "colours differ from the formula (%d live pixels; %s, %s, %s)", live,
-          gs ? "post-gs" : "post-cd", exact ? "exact" : "LUT", persp ? "perspective" : "orthographic");
+    CHECK(formula && live > TW * TH / 2, "colours differ from the formula (%d live pixels; %s, %s, %s, stencil %g)",
+          live, gs ? "post-gs" : "post-cd", exact ? "exact" : "LUT", persp ? "perspective" : "orthographic",
+          (double)cd_wide);
     int same = 1;
     for (int i = 0; i < TW * TH; i++)
         if (R->alpha[i] > 0.0f) same &= memcmp(after + 3 * i, R->g + 3 * i, 3 * sizeof(float)) == 0;
-    CHECK(same, "sheet 3 after sheet 2 differs from sheet 3 alone (%s, %s, %s)", gs ? "post-gs" : "post-cd",
-          exact ? "exact" : "LUT", persp ? "perspective" : "orthographic");
+    CHECK(same, "sheet 3 after sheet 2 differs from sheet 3 alone (%s, %s, %s, stencil %g)", gs ? "post-gs" : "post-cd",
+          exact ? "exact" : "LUT", persp ? "perspective" : "orthographic", (double)cd_wide);
     int lit = 0;
     for (int i = 0; i < TW * TH * 3; i++) lit += R->g[i] > 0.0f && isfinite(R->g[i]);
     CHECK(lit > TW * TH, "sheet 3 emits light");
@@ -273,7 +285,13 @@ int main(void)
     if (c && p && vs_classify_setup(ctx, v, &s, c) == VS_OK && vs_preint_update(p, c, 0.25, NULL)) {
         for (int gs = 0; gs < 2; gs++)
             for (int exact = 0; exact < 2; exact++)
-                for (int persp = 0; persp < 2; persp++) run(p, gs, exact, persp);
+                for (int persp = 0; persp < 2; persp++) {
+                    run(p, gs, exact, persp, 0.0f);
+                    if (!gs) { /* the four-point stencil, alone and mixed */
+                        run(p, gs, exact, persp, 1.0f / 12.0f);
+                        run(p, gs, exact, persp, 1.0f / 32.0f);
+                    }
+                }
     } else
         CHECK(0, "set-up");
     vs_preint_free(p);
