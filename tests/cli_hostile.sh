@@ -211,8 +211,10 @@ for p in pre post-cd post-gs post-alpha raycast; do
 done
 printf '  %-40s %s\n' "non-finite voxels, every pipeline" "${note:-}"
 rm -f nf.exr blank.png
+# the time is a hang guard, not a speed claim: the ASan build, loading
+# OpenImageIO on a busy 2-core machine, took 6.6 s for this 64x64 frame
 run render --scene sphere:32 --iso 5 --size 64x64 -o blank.png
-if [[ $rc -eq 0 && -s blank.png ]] && grep -q 'outside the data range' "$T/err" && [[ $ms -lt 5000 ]]; then
+if [[ $rc -eq 0 && -s blank.png ]] && grep -q 'outside the data range' "$T/err" && [[ $ms -lt 30000 ]]; then
     ok
     printf '  %-40s %5d ms  %s\n' "iso-range outside the data" "$ms" "$(head -1 "$T/err" | head -c 160)"
 else
