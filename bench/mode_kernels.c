@@ -23,7 +23,7 @@ typedef struct kernel_entry {
                  13 splat_voxel_gs (as splat_voxel4, with the gradient layout),
                  14 splat_rows_mix (8 rows of the gradient layout, mixed, into one sheet),
                  15 shade_terms (n dense gradients), 16 preint_alpha (n segments in two halves),
-                 17 classify_cd with the four-point in-sheet stencil (cd_wide 1/12) */
+                 17 classify_cd with the four-point stencils within and across sheets (1/12) */
     void *fn;
 } kernel_entry;
 
@@ -111,7 +111,7 @@ static void shade_bench_init(shade_bench *B)
                            .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,
                            .diffuse = B->diffuse, .specular = B->specular};
     B->T4 = B->T;
-    B->T4.cd_wide = 1.0f / 12.0f;
+    B->T4.cd_wide = B->T4.cd_wide_z = 1.0f / 12.0f;
     for (int i = 3 * SHEET_S; i < 5 * SHEET_S; i++) B->q[i] = B->q[i - 3 * SHEET_S]; /* the stencil's rows */
 }
 
@@ -141,11 +141,13 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
             } break;
             case 5:
                 ((vs_classify_cd_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + SHEET_S + 1 + off,
-                                           B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, SHEET_S, n, &B->T);
+                                           B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, NULL, NULL, SHEET_S,
+                                           n, &B->T);
                 break;
-            case 17: /* two rows and two pixels each side */
+            case 17: /* two rows and two pixels each side, and two sheets (qp, qn read again) */
                 ((vs_classify_cd_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 2 * SHEET_S + 2 + off,
-                                           B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off, SHEET_S, n, &B->T4);
+                                           B->qp + SHEET_S + 1 + off, B->qn + SHEET_S + 1 + off,
+                                           B->qn + 2 * SHEET_S + off, B->qp + 2 * SHEET_S + off, SHEET_S, n, &B->T4);
                 break;
             case 6:
                 /* shading overwrites the gradients: restore them now and then (a copy per call would

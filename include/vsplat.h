@@ -238,12 +238,14 @@ typedef struct vs_settings {
      * 0: never.  Not with a crop box, and not for sheared grids. */
     int resample;
 
-    /* post-cd's differences within a sheet: 2 the paper's central
-     * differences of neighbouring pixels; 4 the four-point stencil, which
-     * reads two pixels each side and follows the detail a sheet carries
-     * when voxels lie less than a pixel apart on the image; 0 (default):
-     * four-point up to 0.8 pixel a voxel, two-point from 0.9 pixel, mixed
-     * linearly between. */
+    /* post-cd's differences: 2 the paper's central differences of
+     * neighbouring pixels and sheets; 4 the four-point stencil, which reads
+     * two pixels (within a sheet) or two sheets (across sheets, with plain
+     * sheets, without a crop box or depth bands) each side; 0 (default):
+     * within a sheet four-point up to 0.8 pixel a voxel, two-point from
+     * 0.9, across sheets two-point while sheets lie up to 1.2 pixels' worth
+     * of voxels apart (pixels a voxel times the slab), four-point from 1.5;
+     * mixed linearly between. */
     int cd_stencil;
 } vs_settings;
 

@@ -58,8 +58,8 @@ static inline __m256 classify_alpha8(const vs_shade_tabs *T, __m256 v, int *none
 
 /* 8 pixels, or the first m of them (masked loads and stores: no access
  * past the span); without an opacity table the gradients only */
-static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
-                             int m, const vs_shade_tabs *T)
+static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn,
+                             const float *qp2, const float *qn2, ptrdiff_t stride, int m, const vs_shade_tabs *T)
 {
     const __m256 half = _mm256_set1_ps(0.5f), two_slab = _mm256_set1_ps(T->two_slab);
     const __m256i in = prefix8(m);
@@ -84,7 +84,14 @@ static inline void classify8(float *alpha, float *g, const float *q, const float
         gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
         gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
     }
-    __m256 gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
+    __m256 gz;
+    if (T->cd_wide_z > 0.0f) { /* as scalar.c */
+        const __m256 c1 = _mm256_set1_ps(0.5f + 2.0f * T->cd_wide_z), c2 = _mm256_set1_ps(T->cd_wide_z);
+        gz = _mm256_div_ps(_mm256_sub_ps(_mm256_mul_ps(c1, _mm256_sub_ps(LD(qn), LD(qp))),
+                                         _mm256_mul_ps(c2, _mm256_sub_ps(LD(qn2), LD(qp2)))),
+                           _mm256_set1_ps(T->slab));
+    } else
+        gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
 #undef LD
     if (m == 8) {
         store3(g, gx, gy, gz);
@@ -95,12 +102,17 @@ static inline void classify8(float *alpha, float *g, const float *q, const float
     }
 }
 
-void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
-                         int n, const vs_shade_tabs *T)
+void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, const float *qp2,
+                         const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T)
 {
+    /* qp2, qn2 are read only with cd_wide_z; NULL stays NULL */
+    const int z2 = T->cd_wide_z > 0.0f;
     int i = 0;
-    for (; i + 8 <= n; i += 8) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, 8, T);
-    if (i < n) classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, stride, n - i, T);
+    for (; i + 8 <= n; i += 8)
+        classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, z2 ? qp2 + i : NULL, z2 ? qn2 + i : NULL, stride, 8, T);
+    if (i < n)
+        classify8(alpha + i, g + 3 * i, q + i, qp + i, qn + i, z2 ? qp2 + i : NULL, z2 ? qn2 + i : NULL, stride, n - i,
+                  T);
 }
 
 /* post-gs: (density, gx, gy, gz) per pixel, transposed to one vector per

@@ -36,6 +36,9 @@ typedef struct vs_shade_tabs {
                                (q[i+1] - q[i-1]) - w (q[i+2] - q[i-2]), which
                                reads two pixels each side (w = 1/12: the
                                four-point stencil itself)                   */
+    float cd_wide_z;        /* the same across sheets: 0, (qn - qp) / two_slab;
+                               else w > 0, ((0.5 + 2w) (qn - qp) - w (qn2 -
+                               qp2)) / slab                                 */
     float ppm, zpm;         /* gradient: view space -> eye frame per mm       */
     int nl;                 /* longitude bins                                 */
     const uint16_t *lambda_bin;
@@ -174,16 +177,18 @@ typedef struct vs_kernels {
     void (*splat_block_mix)(float *dst, ptrdiff_t ds, const float *blk, ptrdiff_t bs, int rows, int nvec,
                             const float m[12]);
     /* post-cd step 1 over one span of a density sheet q (neighbour rows at
-     * +-stride, sheets before/after qp, qn): alpha[i] = opacity table at
-     * q[i] (linear interpolation), and the central-difference gradient
+     * +-stride, sheets before/after qp, qn, and two before/after qp2, qn2):
+     * alpha[i] = opacity table at q[i] (linear interpolation), and the
+     * central-difference gradient
      *   g[3i..3i+2] = 0.5 (q[i+1] - q[i-1]), 0.5 (q[i+s] - q[i-s]), (qn[i] - qp[i]) / two_slab
-     * (with T->cd_wide, the x and y differences as vs_shade_tabs says)
+     * (with T->cd_wide, the x and y differences as vs_shade_tabs says; with
+     * T->cd_wide_z, the depth difference, which then reads qp2 and qn2)
      * at least where alpha[i] > 0: a kernel may leave g alone on a run of
      * pixels that are all transparent.  With T->alpha NULL (pre-integration
      * classifies the segment instead), alpha is left alone and g is written
      * for every i. */
-    void (*classify_cd)(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
-                        int n, const vs_shade_tabs *T);
+    void (*classify_cd)(float *alpha, float *g, const float *q, const float *qp, const float *qn, const float *qp2,
+                        const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
     /* post-gs step 1 over one span of a sheet of (density, three gradient
      * splats) per pixel: alpha[i] = opacity table at q4[4i], and
      * g[3i + c] = q4[4i + 1 + c] / slab where classify_cd writes it */
@@ -264,7 +269,7 @@ typedef void (*vs_splat_voxel_gs_fn)(float *const *dst, const float *w, int ns, 
 typedef unsigned (*vs_place_voxels_fn)(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out);
 typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const float *qp, const float *qn,
-                                  ptrdiff_t stride, int n, const vs_shade_tabs *T);
+                                  const float *qp2, const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
 typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
                                 const vs_shade_tabs *T);
@@ -335,9 +340,9 @@ int vs_project_brick_avx512(const uint16_t *vox, int n, const vs_project_in *P, 
 
 /* classify: classify_cd, classify_gs */
 void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
-                           ptrdiff_t stride, int n, const vs_shade_tabs *T);
-void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
-                         int n, const vs_shade_tabs *T);
+                           const float *qp2, const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
+void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, const float *qp2,
+                         const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
 void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
 

@@ -72,7 +72,7 @@ static inline float lookup_alpha(const vs_shade_tabs *T, float v)
 }
 
 void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
-                           ptrdiff_t stride, int n, const vs_shade_tabs *T)
+                           const float *qp2, const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T)
 {
     for (int i = 0; i < n; i++) {
         if (T->alpha) alpha[i] = lookup_alpha(T, q[i]);
@@ -84,7 +84,11 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
             g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
             g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
         }
-        g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
+        if (T->cd_wide_z > 0.0f) {
+            const float c1 = 0.5f + 2.0f * T->cd_wide_z, c2 = T->cd_wide_z;
+            g[3 * i + 2] = (c1 * (qn[i] - qp[i]) - c2 * (qn2[i] - qp2[i])) / T->slab;
+        } else
+            g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
     }
 }
 

@@ -94,6 +94,8 @@ typedef struct vs_frame {
     double pad_x, pad_y;             /* footprint half-extent + seam, pixels     */
     float cd_wide;                   /* post-cd: weight of the four-point in-sheet
                                         differences (vs_shade_tabs), 0: none   */
+    float cd_wide_z;                 /* post-cd, plain sheets: the same across
+                                        sheets (vs_shade_tabs), 0: none        */
     int seam_px;                     /* tile buffers' seam each side: the reach
                                         of the in-sheet differences (1 or 2)   */
 

@@ -20,6 +20,15 @@ static const vs_stages post_cd[2] = {
      .activate = vs_activate_density,
      .classify = vs_classify_post_cd, .shade = vs_shade_post_exact},
 };
+/* with the four-point stencil across sheets (plain sheets): k - 2 to k + 2 */
+static const vs_stages post_cd_z[2] = {
+    {.ch = 1, .ahead = 2, .behind = 1, .weights = vs_weights_density, .raster = vs_raster1,
+     .activate = vs_activate_density,
+     .classify = vs_classify_post_cd, .shade = vs_shade_post_lut},
+    {.ch = 1, .ahead = 2, .behind = 1, .weights = vs_weights_density, .raster = vs_raster1,
+     .activate = vs_activate_density,
+     .classify = vs_classify_post_cd, .shade = vs_shade_post_exact},
+};
 static const vs_stages post_gs[2] = {
     {.ch = 4, .gradient_splats = 1, .weights = vs_weights_density, .raster = vs_raster_gs,
      .activate = vs_activate_gradient,
@@ -48,12 +57,12 @@ static const vs_stages post_alpha_pi = {.ch = 4, .ahead = 1, .pre_shaded = 1, .w
                                         .raster = vs_raster4, .activate = vs_activate_rgba,
                                         .classify = vs_classify_post_alpha, .shade = vs_shade_post_alpha_preint};
 
-const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint)
+const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint, int wide_z)
 {
     const int e = exact_normals != 0;
     switch (p) {
     case VS_PIPELINE_PRE: return &pre;
-    case VS_PIPELINE_POST_CD: return preint ? &post_cd_pi : &post_cd[e];
+    case VS_PIPELINE_POST_CD: return preint ? &post_cd_pi : wide_z ? &post_cd_z[e] : &post_cd[e];
     case VS_PIPELINE_POST_GS: return preint ? &post_gs_pi : &post_gs[e];
     case VS_PIPELINE_POST_ALPHA: return preint ? &post_alpha_pi : &post_alpha;
     default: return NULL; /* the ray caster has no sheets */

@@ -389,7 +389,18 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
             }
             F.preint = ctx->preint[slot];
         }
-        F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals, F.preint != NULL);
+        /* post-cd's differences within and across sheets (footprint.c);
+         * across, plain sheets alone, and not where a crop box or a depth
+         * band would need one more sheet of ghost */
+        F.cd_wide = s->pipeline != VS_PIPELINE_POST_CD ? 0.0f
+                    : s->cd_stencil == 2      ? 0.0f
+                    : s->cd_stencil == 4      ? 1.0f / 12.0f
+                                              : vs_cd_wide(&F.fp);
+        F.cd_wide_z = s->pipeline != VS_PIPELINE_POST_CD || F.preint || s->has_crop || band || s->cd_stencil == 2
+                          ? 0.0f
+                      : s->cd_stencil == 4 ? 1.0f / 12.0f
+                                           : vs_cd_wide_z(&F.fp, s->slab);
+        F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals, F.preint != NULL, F.cd_wide_z > 0.0f);
     }
     double t_rel = vs_now_ms();
     if ((rc = vs_relevant_get(ctx, rel_slot, ctx->pool, vol, F.cls, seam, &F.rel, &rebuilt)) != VS_OK) goto fail;
@@ -419,10 +430,6 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     F.tiles_x = (W + F.tile - 1) / F.tile;
     F.tiles_y = (H + F.tile - 1) / F.tile;
     F.ntiles = F.tiles_x * F.tiles_y;
-    F.cd_wide = s->pipeline != VS_PIPELINE_POST_CD ? 0.0f
-                : s->cd_stencil == 2      ? 0.0f
-                : s->cd_stencil == 4      ? 1.0f / 12.0f
-                                          : vs_cd_wide(&F.fp);
     F.seam_px = F.cd_wide > 0.0f ? 2 : 1;
     F.pad_x = F.fp.rx + F.seam_px; /* + the seam the in-sheet differences read */
     F.pad_y = F.fp.ry + F.seam_px;

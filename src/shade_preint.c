@@ -203,7 +203,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                     vm[i] = vs_preint_mid_cd(qp[i], q[i], qn[i]);
                     gmz[i] = (qn[i] - q[i]) / slab;
                 }
-                F->kern.classify_cd(unused, g1[0], qn, q, sv->next2 + b0, st, n, sv->tabs);
+                F->kern.classify_cd(unused, g1[0], qn, q, sv->next2 + b0, NULL, NULL, st, n, sv->tabs);
             }
             cells(T, base, vf, cf, ff, n);
             cells(T, base, vm, cm, fm, n);

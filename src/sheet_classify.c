@@ -61,7 +61,7 @@ static inline uint64_t classify_finish(const tile_ctx *t, const sheet_view *sv, 
 }
 
 /* Post-cd: density classified, (FH)D central differences across the
- * sheets before and after.  With pre-integration (post-cd, -gs, -alpha) the
+ * sheets before and after (or the four-point stencil over two each side).  With pre-integration (post-cd, -gs, -alpha) the
  * opacity is the segment's from this sheet to the next instead. */
 uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
@@ -71,7 +71,9 @@ uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf 
         if (sp->xa[y] == sp->xb[y]) continue;
         int o = vs_own(t, sp->xa[y], y);
         size_t b = (size_t)y * t->stride + sp->xa[y];
-        F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, sv->q + b, sv->prev + b, sv->next + b, t->stride,
+        /* the four-point stencil across sheets (tabs cd_wide_z) reads k - 2 and k + 2 */
+        const float *qp2 = sv->prev2 ? sv->prev2 + b : NULL, *qn2 = sv->prev2 ? sv->next2 + b : NULL;
+        F->kern.classify_cd(sb.alpha + o, sb.g + 3 * o, sv->q + b, sv->prev + b, sv->next + b, qp2, qn2, t->stride,
                             sp->xb[y] - sp->xa[y], sv->tabs);
         if (F->preint)
             vs_preint_alpha_row_cd(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->prev + b, sv->q + b, sv->next + b,

@@ -136,7 +136,8 @@ void vs_tile_render(void *arg, int worker, int task)
      * buffers. */
     const int multi = F->use_blocks;
     const int lead = st->ahead > 1 ? st->ahead : 1; /* sheets the ring holds past the shaded one */
-    const int R = multi ? F->fp.vspan + 1 + lead : 2 + lead;
+    const int behind = 1 + st->behind; /* sheets the ring holds before the shaded one */
+    const int R = (multi ? F->fp.vspan + lead : 1 + lead) + behind;
     const size_t sheet_floats = (size_t)ch * t.stride * t.bh;
     const size_t nblk = F->use_skewed   ? (size_t)F->skew_maxrows * 8 * F->skew_maxvec
                         : F->use_blocks ? (size_t)F->blk.ny * 8 * F->blk.nvec
@@ -247,7 +248,7 @@ void vs_tile_render(void *arg, int worker, int task)
     }
     /* slot of sheet k: (k - kbase) % R, never negative from the first
      * sheet the loop opens */
-    const int kbase = kmin - lead;
+    const int kbase = kmin - lead - st->behind;
     const rect own = {t.seam, t.seam, t.tw + t.seam, t.th + t.seam};
     int next_brick = 0;
 
@@ -279,9 +280,11 @@ void vs_tile_render(void *arg, int worker, int task)
             }
         }
         if (k < kmin) continue;
+        /* the sheet no later sheet reads */
+        const int done_slot = ahead ? (k - behind - kbase + R) % R : cur;
         if (k < F->show0) { /* before the band: splatted only for the band's gradients */
-            clear_rect(ring[ahead ? prev : cur], t.stride, ch, &bbox[ahead ? prev : cur]);
-            rect_clear(&bbox[ahead ? prev : cur]);
+            clear_rect(ring[done_slot], t.stride, ch, &bbox[done_slot]);
+            rect_clear(&bbox[done_slot]);
             continue;
         }
         ws->tiles_total++;
@@ -305,13 +308,14 @@ void vs_tile_render(void *arg, int worker, int task)
             const vs_shade_tabs tabs = {.vmin = F->cls->vmin - F->base, .scale = F->cls->scale,
                                         .alpha = F->preint ? NULL : F->alpha_corr, .alpha_zero_x = F->alpha_zero_x,
                                         .color = &F->cls->color[0][0], .slab = slab, .two_slab = 2.0f * slab,
-                                        .cd_wide = F->cd_wide,
+                                        .cd_wide = F->cd_wide, .cd_wide_z = F->cd_wide_z,
                                         .ppm = (float)F->cam.px_per_mm, .zpm = (float)F->cam.z_per_mm,
                                         .nl = F->lut.nl, .lambda_bin = F->lut.lambda_bin, .radius = F->lut.radius,
                                         .phi_bin = F->lut.phi_bin, .diffuse = F->lut.diffuse,
                                         .specular = F->lut.specular};
             const sheet_view sv = {.k = k, .q = ring[cur], .prev = ring[prev], .next = ring[nxt],
-                                   .next2 = ahead > 1 ? ring[(k + 2 - kbase) % R] : NULL, .sp = &sp,
+                                   .next2 = ahead > 1 ? ring[(k + 2 - kbase) % R] : NULL,
+                                   .prev2 = behind > 1 ? ring[(k - 2 - kbase) % R] : NULL, .sp = &sp,
                                    .tabs = &tabs, .acc = acc};
             /* 1. classification + gradients */
             const double t0 = vs_now_ms();
@@ -346,8 +350,7 @@ void vs_tile_render(void *arg, int worker, int task)
             ws->ms_shade += t2 - t1;
             ws->ms_composite += t3 - t2;
         }
-        /* retire the sheet no later sheet reads */
-        const int done_slot = ahead ? prev : cur;
+        /* retire sheet k - behind (done_slot) */
         clear_rect(ring[done_slot], t.stride, ch, &bbox[done_slot]);
         rect_clear(&bbox[done_slot]);
         if (s->occlusion && opaque >= npix) break; /* tile early termination */

@@ -174,6 +174,7 @@ typedef struct sheet_view {
     int k;
     const float *q, *prev, *next;
     const float *next2;  /* sheet k + 2 when the stages rasterize 2 ahead, else NULL */
+    const float *prev2;  /* sheet k - 2 when the stages keep 2 behind, else NULL */
     const spans *sp;
     const vs_shade_tabs *tabs;
     const float *acc;
@@ -186,7 +187,10 @@ typedef struct vs_stages {
     int ch;              /* sheet-buffer channels: 1 (density) or 4        */
     int ahead;           /* sheets rasterized ahead of the one shaded (post-
                             cd's central differences read sheet k + 1, and
-                            pre-integrated, sheet k + 1's read k + 2)       */
+                            pre-integrated, sheet k + 1's read k + 2, and
+                            the four-point stencil across sheets k + 2)     */
+    int behind;          /* sheets kept behind the shaded one past k - 1
+                            (the four-point stencil across sheets: 1)       */
     int gradient_splats; /* post-gs: sections carry the depth derivative's
                             integral E and mix density with its gradient   */
     int pre_shaded;      /* voxels are classified and shaded before splatting */
@@ -207,6 +211,6 @@ typedef struct vs_stages {
 /* The table for a pipeline (exact_normals: shade post-shaded pipelines with
  * exact normals instead of the lookup tables; preint: post-cd, post-gs and post-alpha
  * with pre-integration between sheets, the frame's `preint`). */
-const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint);
+const vs_stages *vs_pipeline_stages(vs_pipeline p, int exact_normals, int preint, int wide_z);
 
 #endif

@@ -165,7 +165,7 @@ static void run(const vs_preint *P, int gs, int exact, int persp, float cd_wide)
     vs_frame *F = &R->F;
     F->s = &R->s;
     F->preint = P;
-    F->stages = vs_pipeline_stages(gs ? VS_PIPELINE_POST_GS : VS_PIPELINE_POST_CD, exact, 1);
+    F->stages = vs_pipeline_stages(gs ? VS_PIPELINE_POST_GS : VS_PIPELINE_POST_CD, exact, 1, 0);
     F->fp.slab = 0.37;
     F->base = 0.125;
     F->cam.px_per_mm = 1.3;

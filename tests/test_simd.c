@@ -250,14 +250,16 @@ static float gcomp(void)
     }
 }
 
-/* step 1 of post-cd: a 5-row density sheet and its neighbours, with the
- * two-point in-sheet differences, the four-point ones and a mix (rep 2,
- * 3); the outputs' guard floats must not change */
+/* step 1 of post-cd: a 5-row density sheet and its neighbours two each
+ * side, with the two-point differences, the four-point ones and mixes
+ * within (rep 2, 3) and across sheets (rep 1, 2, 3); the outputs' guard
+ * floats must not change */
 static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fixture *F)
 {
     enum { S = MAXN + 2 * PAD, NPIX = MAXN + PAD };
-    static const float wide[4] = {0.0f, 0.0f, 1.0f / 12.0f, 0.03125f};
-    float q[5 * S], qp[5 * S], qn[5 * S];
+    static const float wide[4] = {0.0f, 0.0f, 1.0f / 12.0f, 0.03125f}, wide_z[4] = {0.0f, 1.0f / 12.0f, 0.03125f,
+                                                                                      1.0f / 12.0f};
+    float q[5 * S], qp[5 * S], qn[5 * S], qp2[5 * S], qn2[5 * S];
     float ar[NPIX], ao[NPIX], gr[3 * NPIX], go[3 * NPIX], g0[3 * NPIX];
     int cases = 0;
     for (int n = 0; n <= MAXN; n++)
@@ -266,16 +268,20 @@ static int check_classify(const char *isa, vs_classify_cd_fn fn, const shade_fix
                 for (int var = 0; var < 3; var++) {
                     vs_shade_tabs T = classify_tabs(F, var);
                     T.cd_wide = wide[rep];
+                    T.cd_wide_z = wide_z[rep];
                     for (int i = 0; i < 5 * S; i++) {
                         q[i] = var == 1 ? low_density() : density();
-                        qp[i] = rep == 1 ? q[i] : density(); /* rep 1: zero z gradient */
+                        qp[i] = rep == 1 ? q[i] : density(); /* rep 1: zero two-point z difference */
                         qn[i] = density();
+                        qp2[i] = density();
+                        qn2[i] = density();
                     }
                     for (int i = 0; i < NPIX; i++) ar[i] = ao[i] = frand();
                     for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
                     const int b = 2 * S + PAD / 2 + off; /* middle row, unaligned */
-                    vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, S, n, &T);
-                    fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, S, n, &T);
+                    const float *p2 = T.cd_wide_z > 0.0f ? qp2 + b : NULL, *n2 = T.cd_wide_z > 0.0f ? qn2 + b : NULL;
+                    vs_classify_cd_scalar(ar + off, gr + 3 * off, q + b, qp + b, qn + b, p2, n2, S, n, &T);
+                    fn(ao + off, go + 3 * off, q + b, qp + b, qn + b, p2, n2, S, n, &T);
                     if (!classified_agree("classify_cd", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
                     cases++;
                 }
@@ -304,7 +310,7 @@ static void check_cd_reference(const shade_fixture *F)
         T.alpha = NULL;
         T.cd_wide = wide[w];
         const int b = 4 * S + 6; /* pixels (u, v) = (-2..1, 0) */
-        vs_classify_cd_scalar(NULL, g, q + b, qz + b, qz + b, S, 4, &T);
+        vs_classify_cd_scalar(NULL, g, q + b, qz + b, qz + b, NULL, NULL, S, 4, &T);
         const float share = 1.0f - 12.0f * wide[w]; /* of the two-point error */
         for (int i = 0; i < 4; i++) {
             const float u = (float)(i - 2), v = 0.0f;
@@ -313,13 +319,34 @@ static void check_cd_reference(const shade_fixture *F)
                   "in-sheet differences (weight %g) at u=%g: %g %g, expected %g %g", (double)wide[w], (double)u,
                   (double)g[3 * i], (double)g[3 * i + 1], (double)ex, (double)ey);
         }
-        vs_classify_cd_scalar(NULL, g, lin + b, qz + b, qz + b, S, 4, &T);
+        vs_classify_cd_scalar(NULL, g, lin + b, qz + b, qz + b, NULL, NULL, S, 4, &T);
         for (int i = 0; i < 4; i++)
             CHECK(fabsf(g[3 * i] - 3.0f) < 1e-5f && fabsf(g[3 * i + 1] + 5.0f) < 1e-5f,
                   "in-sheet differences (weight %g) of a linear sheet: %g %g", (double)wide[w], (double)g[3 * i],
                   (double)g[3 * i + 1]);
     }
-    printf("classify_cd   scalar  in-sheet differences: 4-point exact on a cubic, mixes by their share\n");
+    /* across sheets, one slab apart: q = z^3 at z = 1 + (-2 .. 2), q' = 3;
+     * the two-point difference reads 4 (h^2 q'''/6 = 1 off), the stencil 3 */
+    float zs[5][S];
+    for (int d = 0; d < 5; d++)
+        for (int x = 0; x < S; x++) zs[d][x] = (float)((d - 1) * (d - 1) * (d - 1));
+    for (int w = 0; w < 3; w++) {
+        vs_shade_tabs T = F->T;
+        T.alpha = NULL;
+        T.cd_wide = 0.0f;
+        T.cd_wide_z = wide[w];
+        T.slab = 1.0f;
+        T.two_slab = 2.0f;
+        const int b = 4 * S + 6;
+        vs_classify_cd_scalar(NULL, g, lin + b, zs[1] + 6, zs[3] + 6, zs[0] + 6, zs[4] + 6, S, 4, &T);
+        const float ez = 3.0f + (1.0f - 12.0f * wide[w]);
+        for (int i = 0; i < 4; i++)
+            CHECK(fabsf(g[3 * i + 2] - ez) < 1e-5f && fabsf(g[3 * i] - 3.0f) < 1e-5f,
+                  "differences across sheets (weight %g): %g, expected %g", (double)wide[w], (double)g[3 * i + 2],
+                  (double)ez);
+    }
+    printf("classify_cd   scalar  differences within and across sheets: 4-point exact on a cubic, mixes by their "
+           "share\n");
 }
 
 /* step 1 of post-gs: (density, gradient splats) per pixel; densities as
@@ -509,10 +536,10 @@ static int composite_off(float *acc, const float *alpha, const float *rgb, int n
 }
 
 /* The checks must be able to fail: versions off by one ulp in one pixel */
-static void classify_off(float *alpha, float *g, const float *q, const float *qp, const float *qn, ptrdiff_t stride,
-                         int n, const vs_shade_tabs *T)
+static void classify_off(float *alpha, float *g, const float *q, const float *qp, const float *qn, const float *qp2,
+                         const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T)
 {
-    vs_classify_cd_scalar(alpha, g, q, qp, qn, stride, n, T);
+    vs_classify_cd_scalar(alpha, g, q, qp, qn, qp2, qn2, stride, n, T);
     if (n > 5) g[3 * 5 + 2] = nextafterf(g[3 * 5 + 2], INFINITY);
 }
 static void classify_gs_off(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)

@@ -603,6 +603,58 @@ static void test_cd_wide_rule(void)
         CHECK(fabsf(w - want[i]) < 1e-5f, "vs_cd_wide at %.3f pixel a voxel: %g, expected %g", ms[i], (double)w,
               (double)want[i]);
     }
+    /* across sheets (vs_cd_wide_z): none up to m slab = 1.2, all from 1.5 */
+    const double mz[5] = {1.0, 1.35, 1.7, 1.7, 3.4}, slab[5] = {1.0, 1.0, 1.0, 0.5, 0.5};
+    const float want_z[5] = {0.0f, 0.5f / 12.0f, 1.0f / 12.0f, 0.0f, 1.0f / 12.0f};
+    for (int i = 0; i < 5; i++) {
+        vs_footprint fp;
+        memset(&fp, 0, sizeof fp);
+        fp.a = 2.0 * M_LN2;
+        fp.A = fp.C = (float)(fp.a / (mz[i] * mz[i]));
+        const float w = vs_cd_wide_z(&fp, slab[i]);
+        CHECK(fabsf(w - want_z[i]) < 1e-5f, "vs_cd_wide_z at %.3f pixel a voxel, slab %g: %g, expected %g", mz[i],
+              slab[i], (double)w, (double)want_z[i]);
+    }
+}
+
+/* Seen large, sheets lie further apart than pixels and the two-point
+ * difference across them follows less of the detail than the in-sheet
+ * ones do: the gradient leans towards the sheet, and post-cd takes the
+ * four-point stencil across sheets (footprint.h vs_cd_wide_z).  head:64 at
+ * 160^2 (2 pixels a voxel) against the exact-Gaussian ray caster of the same
+ * grid: 22.90 dB two-point, 23.51 dB with the stencil. */
+static void test_wide_depth_differences(void)
+{
+    vs_volume *v = tu_scene(ctx, "head:64");
+    if (!v) return;
+    vs_settings s;
+    vs_settings_init(&s);
+    s.width = s.height = 160;
+    s.azimuth = 20;
+    s.elevation = 15;
+    s.pipeline = VS_PIPELINE_RAYCAST;
+    s.ray_step = 0.05;
+    s.ray_analytic = 0;
+    vs_image truth, img;
+    vs_stats st;
+    if (render(v, &s, &truth, &st)) {
+        s.pipeline = VS_PIPELINE_POST_CD;
+        double p[2] = {0, 0}; /* cd_stencil 0 (auto), 2 */
+        for (int i = 0; i < 2; i++) {
+            s.cd_stencil = 2 * i;
+            if (render(v, &s, &img, &st)) {
+                p[i] = psnr_rgb(&truth, &img);
+                vs_image_free(&img);
+            }
+        }
+        printf("head:64 post-cd    2 px a voxel, PSNR vs exact-Gaussian ray caster %.2f dB (two-point %.2f)\n", p[0],
+               p[1]);
+        CHECK(p[0] >= p[1] + 0.3, "head:64 at 2 pixels a voxel: post-cd %.2f dB, two-point %.2f", p[0], p[1]);
+        vs_image_free(&truth);
+    } else {
+        tu_failures++;
+    }
+    vs_volume_release(v);
 }
 
 /* Seen small, a sheet carries detail near its pixels' limit, where the
@@ -925,6 +977,7 @@ int main(void)
     test_against_raycaster("ml", 0, 128, 30.0, 20.0);
     test_cd_wide_rule();
     test_wide_differences();
+    test_wide_depth_differences();
     vs_context_release(ctx);
     TEST_DONE();
 }
