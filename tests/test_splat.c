@@ -535,10 +535,9 @@ static double psnr_rgb(const vs_image *a, const vs_image *b)
     return mse > 0 ? 10.0 * log10(1.0 / mse) : INFINITY;
 }
 
-static void test_against_raycaster(const char *scene, int analytic, int size, double fov, double min_post_cd)
+/* the reference these tests render: the ray caster at 20,15, step 0.05 */
+static vs_settings raycast_settings(int size, int analytic)
 {
-    vs_volume *v = tu_scene(ctx, scene);
-    if (!v) return;
     vs_settings s;
     vs_settings_init(&s);
     s.width = s.height = size;
@@ -547,6 +546,14 @@ static void test_against_raycaster(const char *scene, int analytic, int size, do
     s.pipeline = VS_PIPELINE_RAYCAST;
     s.ray_step = 0.05;
     s.ray_analytic = analytic;
+    return s;
+}
+
+static void test_against_raycaster(const char *scene, int analytic, int size, double fov, double min_post_cd)
+{
+    vs_volume *v = tu_scene(ctx, scene);
+    if (!v) return;
+    vs_settings s = raycast_settings(size, analytic);
     s.perspective_fov = fov;
     vs_image truth;
     vs_stats st;
@@ -617,44 +624,27 @@ static void test_cd_wide_rule(void)
     }
 }
 
-/* Seen large, sheets lie further apart than pixels and the two-point
- * difference across them follows less of the detail than the in-sheet
- * ones do: the gradient leans towards the sheet, and post-cd takes the
- * four-point stencil across sheets (footprint.h vs_cd_wide_z).  head:64 at
- * 160^2 (2 pixels a voxel) against the exact-Gaussian ray caster of the same
- * grid: 22.90 dB two-point, 23.51 dB with the stencil. */
-static void test_wide_depth_differences(void)
+/* Post-cd's PSNR at 20,15 against the ray caster (step 0.05; analytic or
+ * exact-Gaussian) for each cd_stencil in stencils[n]; 0 if a frame failed. */
+static int stencil_psnrs(vs_volume *v, int size, int analytic, const int *stencils, int n, double *p)
 {
-    vs_volume *v = tu_scene(ctx, "head:64");
-    if (!v) return;
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 160;
-    s.azimuth = 20;
-    s.elevation = 15;
-    s.pipeline = VS_PIPELINE_RAYCAST;
-    s.ray_step = 0.05;
-    s.ray_analytic = 0;
+    vs_settings s = raycast_settings(size, analytic);
     vs_image truth, img;
     vs_stats st;
-    if (render(v, &s, &truth, &st)) {
-        s.pipeline = VS_PIPELINE_POST_CD;
-        double p[2] = {0, 0}; /* cd_stencil 0 (auto), 2 */
-        for (int i = 0; i < 2; i++) {
-            s.cd_stencil = 2 * i;
-            if (render(v, &s, &img, &st)) {
-                p[i] = psnr_rgb(&truth, &img);
-                vs_image_free(&img);
-            }
-        }
-        printf("head:64 post-cd    2 px a voxel, PSNR vs exact-Gaussian ray caster %.2f dB (two-point %.2f)\n", p[0],
-               p[1]);
-        CHECK(p[0] >= p[1] + 0.3, "head:64 at 2 pixels a voxel: post-cd %.2f dB, two-point %.2f", p[0], p[1]);
-        vs_image_free(&truth);
-    } else {
-        tu_failures++;
+    if (!render(v, &s, &truth, &st)) return 0;
+    int ok = 1;
+    s.pipeline = VS_PIPELINE_POST_CD;
+    for (int i = 0; i < n; i++) {
+        s.cd_stencil = stencils[i];
+        p[i] = 0.0;
+        if (render(v, &s, &img, &st)) {
+            p[i] = psnr_rgb(&truth, &img);
+            vs_image_free(&img);
+        } else
+            ok = 0;
     }
-    vs_volume_release(v);
+    vs_image_free(&truth);
+    return ok;
 }
 
 /* Seen small, a sheet carries detail near its pixels' limit, where the
@@ -668,38 +658,46 @@ static void test_wide_differences(void)
 {
     vs_volume *v = tu_scene(ctx, "head");
     if (!v) return;
-    vs_settings s;
-    vs_settings_init(&s);
-    s.width = s.height = 128;
-    s.azimuth = 20;
-    s.elevation = 15;
-    s.pipeline = VS_PIPELINE_RAYCAST;
-    s.ray_step = 0.05;
-    s.ray_analytic = 1;
-    vs_image truth, img;
-    vs_stats st;
-    if (render(v, &s, &truth, &st)) {
-        s.pipeline = VS_PIPELINE_POST_CD;
-        double p[3] = {0, 0, 0}; /* cd_stencil 0 (auto), 2, 4 */
-        for (int i = 0; i < 3; i++) {
-            s.cd_stencil = 2 * i;
-            if (render(v, &s, &img, &st)) {
-                p[i] = psnr_rgb(&truth, &img);
-                vs_image_free(&img);
-            }
-        }
+    const int stencils[3] = {0, 2, 4}; /* auto, two-point, four-point */
+    double p[3];
+    if (stencil_psnrs(v, 128, 1, stencils, 3, p)) {
         printf("head    post-cd    0.8 px a voxel, PSNR vs analytic ray caster %.2f dB (two-point %.2f, four-point "
                "%.2f)\n",
                p[0], p[1], p[2]);
         CHECK(p[0] >= 34.0 && p[0] >= p[1] + 2.5, "head at 0.8 pixel a voxel: post-cd %.2f dB, two-point %.2f", p[0],
               p[1]);
         CHECK(fabs(p[2] - p[0]) < 0.1, "head at 0.8 pixel a voxel: four-point %.2f dB, auto %.2f", p[2], p[0]);
-        vs_image_free(&truth);
     } else {
         tu_failures++;
     }
+    vs_settings s;
+    vs_settings_init(&s);
     s.cd_stencil = 3;
+    vs_image img;
+    vs_stats st;
     CHECK(vs_render(ctx, v, &s, &img, &st) == VS_ERR_INVALID_ARGUMENT, "cd_stencil 3 accepted");
+    vs_volume_release(v);
+}
+
+/* Seen large, sheets lie further apart than pixels and the two-point
+ * difference across them follows less of the detail than the in-sheet
+ * ones do: the gradient leans towards the sheet, and post-cd takes the
+ * four-point stencil across sheets (footprint.h vs_cd_wide_z).  head:64 at
+ * 160^2 (2 pixels a voxel) against the exact-Gaussian ray caster of the same
+ * grid: 22.90 dB two-point, 23.51 dB with the stencil. */
+static void test_wide_depth_differences(void)
+{
+    vs_volume *v = tu_scene(ctx, "head:64");
+    if (!v) return;
+    const int stencils[2] = {0, 2};
+    double p[2];
+    if (stencil_psnrs(v, 160, 0, stencils, 2, p)) {
+        printf("head:64 post-cd    2 px a voxel, PSNR vs exact-Gaussian ray caster %.2f dB (two-point %.2f)\n", p[0],
+               p[1]);
+        CHECK(p[0] >= p[1] + 0.3, "head:64 at 2 pixels a voxel: post-cd %.2f dB, two-point %.2f", p[0], p[1]);
+    } else {
+        tu_failures++;
+    }
     vs_volume_release(v);
 }
 
