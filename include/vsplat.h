@@ -240,8 +240,8 @@ typedef struct vs_settings {
 
     /* post-cd's differences: 2 the paper's central differences of
      * neighbouring pixels and sheets; 4 the four-point stencil, which reads
-     * two pixels (within a sheet) or two sheets (across sheets, with plain
-     * sheets, without a crop box or depth bands) each side; 0 (default):
+     * two pixels (within a sheet) or two sheets (across sheets: plain
+     * sheets only, not in depth bands) each side; 0 (default):
      * within a sheet four-point up to 0.8 pixel a voxel, two-point from
      * 0.9, across sheets two-point while sheets lie up to 1.2 pixels' worth
      * of voxels apart (pixels a voxel times the slab), four-point from 1.5;

@@ -390,13 +390,13 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
             F.preint = ctx->preint[slot];
         }
         /* post-cd's differences within and across sheets (footprint.c);
-         * across, plain sheets alone, and not where a crop box or a depth
-         * band would need one more sheet of ghost */
+         * across, plain sheets alone (vsplat-mpi's ghosts then reach two
+         * sheets), and not in depth bands, where it is not measured */
         F.cd_wide = s->pipeline != VS_PIPELINE_POST_CD ? 0.0f
                     : s->cd_stencil == 2      ? 0.0f
                     : s->cd_stencil == 4      ? 1.0f / 12.0f
                                               : vs_cd_wide(&F.fp);
-        F.cd_wide_z = s->pipeline != VS_PIPELINE_POST_CD || F.preint || s->has_crop || band || s->cd_stencil == 2
+        F.cd_wide_z = s->pipeline != VS_PIPELINE_POST_CD || F.preint || band || s->cd_stencil == 2
                           ? 0.0f
                       : s->cd_stencil == 4 ? 1.0f / 12.0f
                                            : vs_cd_wide_z(&F.fp, s->slab);

@@ -243,8 +243,9 @@ static int render_single(vs_context *ctx, const vs_volume *vol, const cli_opts *
 
 /* Voxels a brick needs beyond the ones it owns, so that every sheet point
  * it composites, and the neighbours its gradient reads (one pixel in the
- * sheet, two where post-cd takes its four-point stencil, one sheet
- * across), see all the voxels whose kernel reaches them,
+ * sheet, two where post-cd takes its four-point stencil; one sheet
+ * across, two where it takes the stencil across sheets), see all the
+ * voxels whose kernel reaches them,
  * and those voxels the neighbours their own gradient reads (two voxels:
  * pre-shaded pipelines, src/voxel_gradient.h).
  * A pixel spans more than a voxel when zoomed out; perspective doubles the
@@ -262,7 +263,14 @@ static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3]
     const int wide = s->pipeline == VS_PIPELINE_POST_CD &&
                      (s->cd_stencil == 4 || (s->cd_stencil == 0 && (unit < 0.9 * px_mm || s->perspective_fov > 0)));
     if (wide) px_mm *= 2.0;
-    const double step_mm = px_mm > s->slab * unit ? px_mm : s->slab * unit;
+    /* and across sheets (vs_cd_wide_z): from 1.2 pixels a voxel times the
+     * slab, anywhere in perspective; erring wide where pre-integration
+     * turns it off */
+    const int wide_z = s->pipeline == VS_PIPELINE_POST_CD &&
+                       (s->cd_stencil == 4 || (s->cd_stencil == 0 && (s->slab * unit >= 1.2 * px_mm ||
+                                                                      s->perspective_fov > 0)));
+    const double across = (wide_z ? 2.0 : 1.0) * s->slab * unit;
+    const double step_mm = px_mm > across ? px_mm : across;
     double reach = ceil(step_mm / unit) * (s->perspective_fov > 0 ? 2 : 1);
     return (int)ceil(s->kernel_radius) + 2 + (int)(reach < 64 ? reach : 64);
 }
