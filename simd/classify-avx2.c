@@ -56,6 +56,12 @@ static inline __m256 classify_alpha8(const vs_shade_tabs *T, __m256 v, int *none
     return *none ? _mm256_setzero_ps() : lookup_alpha_at8(T, x);
 }
 
+/* as scalar.c's wide_diff: (0.5 + 2w) d1 - w d2, multiply, multiply, subtract */
+static inline __m256 wide_diff8(float w, __m256 d1, __m256 d2)
+{
+    return _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f + 2.0f * w), d1), _mm256_mul_ps(_mm256_set1_ps(w), d2));
+}
+
 /* 8 pixels, or the first m of them (masked loads and stores: no access
  * past the span); without an opacity table the gradients only */
 static inline void classify8(float *alpha, float *g, const float *q, const float *qp, const float *qn,
@@ -74,24 +80,18 @@ static inline void classify8(float *alpha, float *g, const float *q, const float
         if (none) return; /* no gradient is read here */
     }
     __m256 gx, gy;
-    if (T->cd_wide > 0.0f) { /* as scalar.c: multiply, multiply, subtract */
-        const __m256 c1 = _mm256_set1_ps(0.5f + 2.0f * T->cd_wide), c2 = _mm256_set1_ps(T->cd_wide);
-        gx = _mm256_sub_ps(_mm256_mul_ps(c1, _mm256_sub_ps(LD(q + 1), LD(q - 1))),
-                           _mm256_mul_ps(c2, _mm256_sub_ps(LD(q + 2), LD(q - 2))));
-        gy = _mm256_sub_ps(_mm256_mul_ps(c1, _mm256_sub_ps(LD(q + stride), LD(q - stride))),
-                           _mm256_mul_ps(c2, _mm256_sub_ps(LD(q + 2 * stride), LD(q - 2 * stride))));
+    if (T->cd_wide > 0.0f) {
+        gx = wide_diff8(T->cd_wide, _mm256_sub_ps(LD(q + 1), LD(q - 1)), _mm256_sub_ps(LD(q + 2), LD(q - 2)));
+        gy = wide_diff8(T->cd_wide, _mm256_sub_ps(LD(q + stride), LD(q - stride)),
+                        _mm256_sub_ps(LD(q + 2 * stride), LD(q - 2 * stride)));
     } else {
         gx = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + 1), LD(q - 1)));
         gy = _mm256_mul_ps(half, _mm256_sub_ps(LD(q + stride), LD(q - stride)));
     }
-    __m256 gz;
-    if (T->cd_wide_z > 0.0f) { /* as scalar.c */
-        const __m256 c1 = _mm256_set1_ps(0.5f + 2.0f * T->cd_wide_z), c2 = _mm256_set1_ps(T->cd_wide_z);
-        gz = _mm256_div_ps(_mm256_sub_ps(_mm256_mul_ps(c1, _mm256_sub_ps(LD(qn), LD(qp))),
-                                         _mm256_mul_ps(c2, _mm256_sub_ps(LD(qn2), LD(qp2)))),
-                           _mm256_set1_ps(T->slab));
-    } else
-        gz = _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
+    const __m256 gz = T->cd_wide_z > 0.0f ? _mm256_div_ps(wide_diff8(T->cd_wide_z, _mm256_sub_ps(LD(qn), LD(qp)),
+                                                                     _mm256_sub_ps(LD(qn2), LD(qp2))),
+                                                          _mm256_set1_ps(T->slab))
+                                          : _mm256_div_ps(_mm256_sub_ps(LD(qn), LD(qp)), two_slab);
 #undef LD
     if (m == 8) {
         store3(g, gx, gy, gz);

@@ -71,23 +71,26 @@ static inline float lookup_alpha(const vs_shade_tabs *T, float v)
     return T->alpha[j] + f * (T->alpha[j + 1] - T->alpha[j]);
 }
 
+/* the differences mixed with weight w (vs_shade_tabs cd_wide): one step
+ * each side d1, two steps d2 */
+static inline float wide_diff(float w, float d1, float d2) { return (0.5f + 2.0f * w) * d1 - w * d2; }
+
 void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *qp, const float *qn,
                            const float *qp2, const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T)
 {
+    const float w = T->cd_wide, wz = T->cd_wide_z;
     for (int i = 0; i < n; i++) {
         if (T->alpha) alpha[i] = lookup_alpha(T, q[i]);
-        if (T->cd_wide > 0.0f) {
-            const float c1 = 0.5f + 2.0f * T->cd_wide, c2 = T->cd_wide;
-            g[3 * i + 0] = c1 * (q[i + 1] - q[i - 1]) - c2 * (q[i + 2] - q[i - 2]);
-            g[3 * i + 1] = c1 * (q[i + stride] - q[i - stride]) - c2 * (q[i + 2 * stride] - q[i - 2 * stride]);
+        if (w > 0.0f) {
+            g[3 * i + 0] = wide_diff(w, q[i + 1] - q[i - 1], q[i + 2] - q[i - 2]);
+            g[3 * i + 1] = wide_diff(w, q[i + stride] - q[i - stride], q[i + 2 * stride] - q[i - 2 * stride]);
         } else {
             g[3 * i + 0] = 0.5f * (q[i + 1] - q[i - 1]);
             g[3 * i + 1] = 0.5f * (q[i + stride] - q[i - stride]);
         }
-        if (T->cd_wide_z > 0.0f) {
-            const float c1 = 0.5f + 2.0f * T->cd_wide_z, c2 = T->cd_wide_z;
-            g[3 * i + 2] = (c1 * (qn[i] - qp[i]) - c2 * (qn2[i] - qp2[i])) / T->slab;
-        } else
+        if (wz > 0.0f)
+            g[3 * i + 2] = wide_diff(wz, qn[i] - qp[i], qn2[i] - qp2[i]) / T->slab;
+        else
             g[3 * i + 2] = (qn[i] - qp[i]) / T->two_slab;
     }
 }

@@ -76,7 +76,7 @@ void vs_expand_brick(tile_state *ts, uint32_t b, int opening)
     const float slab = (float)F->fp.slab, rz = (float)F->fp.rz;
     /* the footprint's reach alone: the buffer bounds below already hold
      * the seam the in-sheet differences read */
-    const float px = (float)(F->pad_x - F->seam_px), py = (float)(F->pad_y - F->seam_px);
+    const float px = (float)F->fp.rx, py = (float)F->fp.ry;
     const float bx0 = (float)t->ox, bx1 = (float)(t->ox + t->bw - 1);
     const float by0 = (float)t->oy, by1 = (float)(t->oy + t->bh - 1);
     /* voxel centres from the brick's lowest corner in float: a voxel lies

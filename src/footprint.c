@@ -54,8 +54,8 @@ float vs_cd_wide(const vs_footprint *fp)
  * to the ray caster; where they lie about as far apart as pixels (0.94-1.2)
  * it measured up to 0.4 dB further, and with pre-integration 0.2-0.6 dB
  * further at every size (docs/PERFORMANCE.md, "Differences across
- * sheets"; render.c leaves pre-integrated sheets out).  So: none up to m slab = 1.2, the stencil from 1.5, mixed
- * linearly between. */
+ * sheets"; render.c leaves pre-integrated sheets out).  So: none up to
+ * m slab = 1.2, the stencil from 1.5, mixed linearly between. */
 float vs_cd_wide_z(const vs_footprint *fp, double slab_voxels)
 {
     const double r = px_per_voxel(fp) * slab_voxels;

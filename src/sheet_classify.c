@@ -61,8 +61,9 @@ static inline uint64_t classify_finish(const tile_ctx *t, const sheet_view *sv, 
 }
 
 /* Post-cd: density classified, (FH)D central differences across the
- * sheets before and after (or the four-point stencil over two each side).  With pre-integration (post-cd, -gs, -alpha) the
- * opacity is the segment's from this sheet to the next instead. */
+ * sheets before and after (or the four-point stencil over two each side).
+ * With pre-integration (post-cd, -gs, -alpha) the opacity is the
+ * segment's from this sheet to the next instead. */
 uint64_t vs_classify_post_cd(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 {
     const vs_frame *F = t->F;
