@@ -247,6 +247,13 @@ typedef struct vs_settings {
      * of voxels apart (pixels a voxel times the slab), four-point from 1.5;
      * mixed linearly between. */
     int cd_stencil;
+
+    /* the ray caster's Gaussian reconstruction: 0 (default) the kernel's
+     * plain sum over the voxels, what splatting approximates; 1 that sum
+     * over the kernel's own sum at the same point (weights that sum to 1),
+     * which leaves out the lattice ripple the plain sum shows on smooth
+     * surfaces and in translucent regions */
+    int ray_normalize;
 } vs_settings;
 
 typedef struct vs_stage_times {

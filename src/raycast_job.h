@@ -24,6 +24,7 @@ typedef struct rc_job {
     vs_classify *cls;
     vs_light light;
     int mode;
+    int normalize;         /* Gaussian: weights over their lattice sum     */
     double R, R2, b;       /* kernel radius, its square, normalization      */
     double base;           /* sampled volumes: values are reconstructed less
                               this (the volume's minimum), as splatting does,

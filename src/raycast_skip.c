@@ -243,9 +243,10 @@ static void skip_chunk(skip_build *B)
                 }
                 double vlo = fmin(m * B->wmin, m * B->wmax), vhi = fmax(M * B->wmin, M * B->wmax);
                 size_t bl = ((size_t)(b - B->b0) * by + y) * bx + x;
-                if (gauss) {
-                    vhi = fmin(vhi, kb_hi[bl]);
-                    vlo = fmax(vlo, -(double)kb_neg[bl]);
+                if (gauss) { /* normalised: the sums over W, at least wmin */
+                    const double over = J->normalize ? 1.0 / B->wmin : 1.0;
+                    vhi = fmin(vhi, kb_hi[bl] * over);
+                    vlo = fmax(vlo, -(double)kb_neg[bl] * over);
                 }
                 J->skip[((size_t)b * by + y) * bx + x] =
                     (uint8_t)(vhi < c->alpha_lo - J->base || vlo > c->alpha_hi - J->base);

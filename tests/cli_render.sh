@@ -20,7 +20,7 @@ for opt in --scene --pipeline --iso --ramp --opacity --material --background --t
     --zoom --perspective --center --slab --kernel-radius --footprint-res --seam --threads --isa --no-pin \
     --no-occlusion --occlusion-threshold --no-tiles --tile-size --exact-normals --normal-lut --no-preintegration \
     --lod --no-lod --resample \
-    --ray-step --trilinear --no-analytic --light --ambient --diffuse --specular --shininess \
+    --ray-step --trilinear --no-analytic --ray-normalize --light --ambient --diffuse --specular --shininess \
     --dims --type --spacing --endian --bits --stats --print-stats -q; do
     if grep -q -- "$opt\b" "$T/out"; then ok; else bad "render --help does not list $opt"; fi
 done

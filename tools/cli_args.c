@@ -78,7 +78,7 @@ enum opt_id {
     O_HELP, O_OUTPUT, O_SCENE, O_PIPELINE, O_ISO, O_RAMP, O_OPACITY, O_MATERIAL, O_BACKGROUND,
     O_TF, O_SIZE, O_VIEW, O_ZOOM, O_PERSPECTIVE, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
-    O_RAY_STEP, O_TRILINEAR, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
+    O_RAY_STEP, O_TRILINEAR, O_RAY_NORMALIZE, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
     O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD, O_RESAMPLE, O_CD_STENCIL
 };
@@ -134,6 +134,7 @@ static const opt_def opt_table[] = {
     {"--ray-step", 1, O_RAY_STEP, 0},
     {"--trilinear", 0, O_TRILINEAR, 0},
     {"--no-analytic", 0, O_NO_ANALYTIC, 0},
+    {"--ray-normalize", 0, O_RAY_NORMALIZE, 0},
     {"--light", 1, O_LIGHT, 0},
     {"--ambient", 1, O_AMBIENT, 0},
     {"--diffuse", 1, O_DIFFUSE, 0},
@@ -399,6 +400,7 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_RAY_STEP: return parse_range_double(n, v, 0.001, 16.0, 0, &s->ray_step, err, cap);
     case O_TRILINEAR: s->ray_trilinear = 1; return 0;
     case O_NO_ANALYTIC: s->ray_analytic = 0; return 0;
+    case O_RAY_NORMALIZE: s->ray_normalize = 1; return 0;
     case O_LIGHT:
         if (!to_doubles(v, 3, t)) return fail(err, cap, "--light: expected X,Y,Z (direction towards the light), got '%s'", v);
         if (t[0] == 0.0 && t[1] == 0.0 && t[2] == 0.0)
@@ -681,6 +683,7 @@ void cli_render_usage(FILE *f)
             "  --ray-step S           step in voxel units (default 0.1)\n"
             "  --trilinear            trilinear instead of exact Gaussian reconstruction\n"
             "  --no-analytic          sample the voxels even if the scene is analytic\n"
+            "  --ray-normalize        Gaussian weights over their sum: without the lattice ripple\n"
             "execution:\n"
             "  --threads N            worker threads, 0..256, 0 = one per core (default $VSPLAT_THREADS or 0)\n"
             "  --isa I                auto | scalar | sse4 | avx2 | avx512 (default $VSPLAT_ISA or auto)\n"

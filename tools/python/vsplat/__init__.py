@@ -366,7 +366,9 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
               lod_pixels=0 (full resolution however small the volume is seen),
               resample=0 (anisotropic voxels splatted as stored),
               cd_stencil=2 (post-cd: the paper's two-point differences
-              at any size; 4 the four-point stencils; 0 auto)
+              at any size; 4 the four-point stencils; 0 auto),
+              ray_normalize=1 (pipeline "raycast": Gaussian weights over
+              their sum, without the kernel's lattice ripple)
 
     The GIL is released while the frame renders.
     """

@@ -61,6 +61,7 @@ class Settings(ctypes.Structure):
         ("lod_pixels", c_double),
         ("resample", c_int),
         ("cd_stencil", c_int),
+        ("ray_normalize", c_int),
     ]
 
 
