@@ -242,9 +242,9 @@ typedef struct vs_settings {
      * neighbouring pixels and sheets; 4 the four-point stencil, which reads
      * two pixels (within a sheet) or two sheets (across sheets: plain
      * sheets only, not in depth bands) each side; 0 (default):
-     * within a sheet four-point up to 0.8 pixel a voxel, two-point from
-     * 0.9, across sheets two-point while sheets lie up to 1.2 pixels' worth
-     * of voxels apart (pixels a voxel times the slab), four-point from 1.5;
+     * within a sheet four-point up to 1.4 pixels a voxel, two-point from
+     * 1.5, across sheets two-point while sheets lie up to 0.7 pixel's worth
+     * of voxels apart (pixels a voxel times the slab), four-point from 1.0;
      * mixed linearly between. */
     int cd_stencil;
 

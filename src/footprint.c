@@ -13,18 +13,22 @@ void vs_footprint_free(vs_footprint *fp)
     fp->exp_table = fp->depth_table = NULL;
 }
 
-/* A sheet carries the volume's detail up to the frequencies the kernel
- * passes, which in pixels rise as voxels come closer together on the
- * image, and there the two-point difference falls short of the derivative
- * (at 0.8 pixel a voxel the kernel passes detail four pixels in period at
- * 0.87 of its strength; of its derivative the two-point difference takes
- * 0.64, the four-point stencil 0.85).  Towards a pixel a voxel the gain
- * falls to half a dB or less, and from 1.2-1.4 pixels the two-point one
- * measured closer to the ray caster on opaque surfaces, while the
- * stencil's two-pixel tile seam costs 5-24 % of a frame seen this small
- * whatever the mix (more voxels reach each tile, fewer are culled).  So:
- * the four-point stencil up to 0.8 pixel a voxel, the two-point one from
- * 0.9, mixed linearly between so that a zoom does not jump
+/* The gradient's x and y come from pixels 1/m voxels apart, its z from
+ * sheets a slab apart, and shading follows the gradient's direction, so
+ * what matters is that the three differences follow detail alike.  Seen
+ * small, a sheet carries detail near its pixels' limit, where the
+ * two-point difference falls short of the derivative (at 0.8 pixel a
+ * voxel the kernel passes detail four pixels in period at 0.87 of its
+ * strength; of its derivative the two-point difference takes 0.64, the
+ * four-point stencil 0.85); seen large, the sheets lie further apart than
+ * the pixels and the difference across them falls short.  Either stencil
+ * alone turns the normal where the other direction's difference is left
+ * two-point (at 1-1.9 pixels a voxel each measured 0.1-0.4 dB further from
+ * the ray caster); both together were 0.2-1.8 dB closer from 0.8 to 1.4
+ * pixels a voxel (the Colin27 heads, the engine, the CT head at 256^2-448^2,
+ * against the exact-Gaussian ray caster with and without its lattice
+ * ripple), at 5-17 % of a frame for the in-sheet stencil's two-pixel tile
+ * seam.  Past 1.5 the in-sheet stencil gains under 0.1 dB
  * (docs/PERFORMANCE.md, "In-sheet differences").  m is measured along the
  * footprint's narrowest direction, where Qxx's larger eigenvalue is
  * a / m^2. */
@@ -35,31 +39,27 @@ static double px_per_voxel(const vs_footprint *fp)
     return l > 0.0 ? sqrt(fp->a / l) : 0.0;
 }
 
+/* In a sheet: the four-point stencil up to 1.4 pixels a voxel, the
+ * two-point one from 1.5, mixed linearly between so that a zoom does not
+ * jump. */
 float vs_cd_wide(const vs_footprint *fp)
 {
     const double m = px_per_voxel(fp);
     if (!(m > 0.0)) return 0.0f;
-    double beta = (0.9 - m) / 0.1;
+    double beta = (1.5 - m) / 0.1;
     if (!(beta > 0.0)) return 0.0f;
     if (beta > 1.0) beta = 1.0;
     return (float)(beta / 12.0);
 }
 
-/* Across sheets the same trade: the gradient's x and y come from pixels
- * 1/m voxels apart, its z from sheets a slab apart, and the shading
- * follows the gradient's direction, so what matters is that the three
- * differences follow detail alike.  Where sheets lie much further apart
- * than pixels (m slab >= 1.5: the heads and the engine at 512^2) the
- * four-point stencil across sheets brought plain post-cd 0.3-1.0 dB closer
- * to the ray caster; where they lie about as far apart as pixels (0.94-1.2)
- * it measured up to 0.4 dB further, and with pre-integration 0.2-0.6 dB
- * further at every size (docs/PERFORMANCE.md, "Differences across
- * sheets"; render.c leaves pre-integrated sheets out).  So: none up to
- * m slab = 1.2, the stencil from 1.5, mixed linearly between. */
+/* Across sheets: none up to m slab = 0.7 (there the two-point difference
+ * across a slab follows the detail the in-sheet ones do), the stencil from
+ * 1.0, mixed linearly between.  render.c leaves pre-integrated sheets out:
+ * there it measured 0.2-0.6 dB further at every size. */
 float vs_cd_wide_z(const vs_footprint *fp, double slab_voxels)
 {
     const double r = px_per_voxel(fp) * slab_voxels;
-    double beta = (r - 1.2) / 0.3;
+    double beta = (r - 0.7) / 0.3;
     if (!(beta > 0.0)) return 0.0f;
     if (beta > 1.0) beta = 1.0;
     return (float)(beta / 12.0);

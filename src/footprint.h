@@ -75,11 +75,11 @@ void vs_footprint_free(vs_footprint *fp);
 
 /* Post-cd's weight of the four-point in-sheet differences for this
  * footprint (simd/kernels.h vs_shade_tabs cd_wide): 1/12 when voxels lie at
- * most 0.8 pixel apart on the image, 0 from 0.9 pixel, linear between. */
+ * most 1.4 pixels apart on the image, 0 from 1.5 pixels, linear between. */
 float vs_cd_wide(const vs_footprint *fp);
 /* The same across sheets (vs_shade_tabs cd_wide_z), for sheets slab_voxels
- * voxels apart: 0 while sheets lie at most 1.2 pixels' worth of voxels
- * apart (m slab), 1/12 from 1.5, linear between. */
+ * voxels apart: 0 while sheets lie at most 0.7 pixel's worth of voxels
+ * apart (m slab), 1/12 from 1.0, linear between. */
 float vs_cd_wide_z(const vs_footprint *fp, double slab_voxels);
 
 /* exp(-t) from a table of n entries, scale entries per unit of t >= 0 (the

@@ -196,7 +196,9 @@ EOF_PY
 import json, sys
 parts, whole = (json.load(open(p)) for p in sys.argv[1:])
 assert parts["reads"] == "per rank" and whole["reads"] == "rank 0", (parts["reads"], whole["reads"])
-assert all(r["voxels_peak"] < parts["voxels"] / 2 for r in parts["per_rank"]), parts["per_rank"]
+# a part and its ghost layers (at 1.1 pixels a voxel two pixels deep for post-cd's
+# four-point stencil): the largest of three holds half the volume
+assert all(r["voxels_peak"] <= 0.55 * parts["voxels"] for r in parts["per_rank"]), parts["per_rank"]
 assert all(r["bytes_scatter"] == 0 for r in parts["per_rank"])
 assert whole["per_rank"][0]["voxels_peak"] == whole["voxels"]
 EOF_PY
