@@ -200,7 +200,10 @@ int bench_error(const bench_opts *o)
             nref.keep_image = 1;
             snprintf(label, sizeof label, "error %s normalised reference", sc->name);
             have_nref = !bench_run(label, &nref, 1, 1);
-            if (!have_nref) bench_cases_free(&nref, 1);
+            if (!have_nref) {
+                failed++;
+                bench_cases_free(&nref, 1);
+            }
         }
         double ref_edge = sc->edge ? edge_width(&ref.img) : NAN;
         const char *refname = sc->analytic ? "analytic ray caster" : "exact-Gaussian ray caster";
@@ -244,6 +247,7 @@ int bench_error(const bench_opts *o)
         failed += bench_run(label, cases, n, runs);
         vs_context *cctx = NULL;
         vs_context_create(&cctx);
+        for (int i = 0; i < n; i++) rows[i].psnr_n = NAN;
         for (int i = 0; i < n; i++) {
             if (cases[i].failed || !cctx) continue;
             rows[i].ms = bench_summarize(&cases[i], bench_m_total);

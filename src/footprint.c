@@ -24,7 +24,7 @@ void vs_footprint_free(vs_footprint *fp)
  * the pixels and the difference across them falls short.  Either stencil
  * alone turns the normal where the other direction's difference is left
  * two-point (at 1-1.9 pixels a voxel each measured 0.1-0.4 dB further from
- * the ray caster); both together were 0.2-1.8 dB closer from 0.8 to 1.4
+ * the ray caster); both together were 0.1-1.8 dB closer from 0.8 to 1.4
  * pixels a voxel (the Colin27 heads, the engine, the CT head at 256^2-448^2,
  * against the exact-Gaussian ray caster with and without its lattice
  * ripple), at 5-17 % of a frame for the in-sheet stencil's two-pixel tile

@@ -38,7 +38,7 @@ static double voxel(const struct vs_volume *v, int i, int j, int k, double base)
 /* The kernel's sum over every lattice point within R of p, inside the
  * volume or not, W(p) = sum_j 2^(-2|p-j|^2) (without b), and its gradient
  * less the factor -4 ln2 (as sx, sy, sz below).  It ripples with the
- * lattice: about 1.6e-3 of its mean for R = 2. */
+ * lattice: within about 0.5 % of its mean over a cell for R = 2. */
 static double lattice_sum(const rc_job *J, const double p[3], double dw[3])
 {
     int lo[3], n[3];
@@ -382,6 +382,12 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: ray_normalize %d must be 0 or 1", s->ray_normalize);
     if (!(s->kernel_radius > 0.0) || !(s->kernel_radius <= 8.0))
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: kernel radius %g must lie in (0, 8]",
+                            s->kernel_radius);
+    /* under sqrt(3)/2 a cell centre has no lattice point within R (0/0), and
+     * near it the lattice sum's sampled lower bound (raycast_skip.c) misses
+     * its jumps */
+    if (s->ray_normalize && s->kernel_radius < 1.0)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: ray_normalize needs a kernel radius of 1 or more, not %g",
                             s->kernel_radius);
     if (s->threads < 0)
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "raycast: thread count %d is negative", s->threads);

@@ -241,7 +241,9 @@ static void skip_chunk(skip_build *B)
                     if (m > 0.0) m = 0.0;
                     if (M < 0.0) M = 0.0;
                 }
-                double vlo = fmin(m * B->wmin, m * B->wmax), vhi = fmax(M * B->wmin, M * B->wmax);
+                /* normalised: a convex combination of the values, within [m, M] */
+                double vlo = J->normalize ? m : fmin(m * B->wmin, m * B->wmax),
+                       vhi = J->normalize ? M : fmax(M * B->wmin, M * B->wmax);
                 size_t bl = ((size_t)(b - B->b0) * by + y) * bx + x;
                 if (gauss) { /* normalised: the sums over W, at least wmin */
                     const double over = J->normalize ? 1.0 / B->wmin : 1.0;

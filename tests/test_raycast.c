@@ -214,6 +214,12 @@ int main(void)
         vs_image bad = {0};
         CHECK(vs_raycast_render(ctx, sph, &s, &bad, NULL) == VS_ERR_INVALID_ARGUMENT, "ray_normalize 2 refused");
         vs_image_free(&bad);
+        s.ray_normalize = 1;
+        s.kernel_radius = 0.8; /* a cell centre with no lattice point within R */
+        CHECK(vs_raycast_render(ctx, sph, &s, &bad, NULL) == VS_ERR_INVALID_ARGUMENT,
+              "ray_normalize with kernel radius 0.8 refused");
+        vs_image_free(&bad);
+        s.kernel_radius = 2.0;
     }
     s.ray_normalize = 0;
     /* trilinear, for comparison */

@@ -258,6 +258,7 @@ static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3]
         if (sp[a] < unit) unit = sp[a];
     }
     double px_mm = extent / (s->zoom * s->width);
+    const double px0 = px_mm; /* the rules' pixel, before the in-sheet stencil widens the reach */
     /* post-cd's four-point stencil (src/footprint.c vs_cd_wide): below 1.5
      * pixels a voxel, anywhere on a perspective view's far side */
     const int wide = s->pipeline == VS_PIPELINE_POST_CD &&
@@ -267,7 +268,7 @@ static int ghost_layers(const vs_settings *s, const int d[3], const double sp[3]
      * slab, anywhere in perspective; erring wide where pre-integration
      * turns it off */
     const int wide_z = s->pipeline == VS_PIPELINE_POST_CD &&
-                       (s->cd_stencil == 4 || (s->cd_stencil == 0 && (s->slab * unit >= 0.7 * px_mm ||
+                       (s->cd_stencil == 4 || (s->cd_stencil == 0 && (s->slab * unit >= 0.7 * px0 ||
                                                                       s->perspective_fov > 0)));
     const double across = (wide_z ? 2.0 : 1.0) * s->slab * unit;
     const double step_mm = px_mm > across ? px_mm : across;
