@@ -35,42 +35,6 @@ static double voxel(const struct vs_volume *v, int i, int j, int k, double base)
     return isfinite(x) ? x - base : 0.0;
 }
 
-/* The kernel's sum over every lattice point within R of p, inside the
- * volume or not, W(p) = sum_j 2^(-2|p-j|^2) (without b), and its gradient
- * less the factor -4 ln2 (as sx, sy, sz below).  It ripples with the
- * lattice: within about 0.5 % of its mean over a cell for R = 2. */
-static double lattice_sum(const rc_job *J, const double p[3], double dw[3])
-{
-    int lo[3], n[3];
-    double d[3][MAX_TAPS], d2[3][MAX_TAPS], w[3][MAX_TAPS];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = (int)ceil(p[a] - J->R);
-        n[a] = (int)floor(p[a] + J->R) - lo[a] + 1;
-        for (int i = 0; i < n[a]; i++) {
-            d[a][i] = p[a] - (lo[a] + i);
-            d2[a][i] = d[a][i] * d[a][i];
-            w[a][i] = exp2(-2.0 * d2[a][i]);
-        }
-    }
-    double W = 0.0;
-    dw[0] = dw[1] = dw[2] = 0.0;
-    for (int k = 0; k < n[2]; k++)
-        for (int j = 0; j < n[1]; j++) {
-            const double ry = J->R2 - d2[2][k] - d2[1][j], wyz = w[1][j] * w[2][k];
-            double rs = 0.0, rx = 0.0;
-            for (int i = 0; i < n[0]; i++)
-                if (d2[0][i] <= ry) {
-                    rs += w[0][i];
-                    rx += w[0][i] * d[0][i];
-                }
-            W += rs * wyz;
-            dw[0] += rx * wyz;
-            dw[1] += rs * wyz * d[1][j];
-            dw[2] += rs * wyz * d[2][k];
-        }
-    return W;
-}
-
 /* ---- Gaussian reconstruction: f(p) = b sum_j f_j 2^(-2|p-j|^2), |p-j| <= R;
  * normalised (settings' ray_normalize), f(p) = sum_j f_j 2^(-2|p-j|^2) / W(p):
  * the weights a partition of unity, so the kernel's lattice ripple, which
@@ -79,59 +43,74 @@ static double lattice_sum(const rc_job *J, const double p[3], double dw[3])
 static double gauss_sample(const rc_job *J, const double p[3], double g[3])
 {
     const struct vs_volume *v = J->vol;
-    int lo[3], hi[3];
+    /* voxels [lo, hi] within R inside the volume; the taps t0.. cover them
+     * and, normalised, every lattice point within R (the lattice sum W(p),
+     * which ripples within about 0.5 % of its mean over a cell for R = 2,
+     * counts those outside the volume too: they read as base, 0 here) */
+    int lo[3], hi[3], t0[3], nt[3];
     double d[3][MAX_TAPS], d2[3][MAX_TAPS], w[3][MAX_TAPS];
     for (int a = 0; a < 3; a++) {
-        lo[a] = (int)ceil(p[a] - J->R);
-        hi[a] = (int)floor(p[a] + J->R);
-        if (lo[a] < 0) lo[a] = 0;
-        if (hi[a] > v->dims[a] - 1) hi[a] = v->dims[a] - 1;
+        const int ulo = (int)ceil(p[a] - J->R), uhi = (int)floor(p[a] + J->R);
+        lo[a] = ulo < 0 ? 0 : ulo;
+        hi[a] = uhi > v->dims[a] - 1 ? v->dims[a] - 1 : uhi;
         if (lo[a] > hi[a]) {
             if (g) g[0] = g[1] = g[2] = 0.0;
             return 0.0;
         }
-        for (int i = lo[a]; i <= hi[a]; i++) {
-            double t = p[a] - i;
-            d[a][i - lo[a]] = t;
-            d2[a][i - lo[a]] = t * t;
-            w[a][i - lo[a]] = exp2(-2.0 * t * t); /* separable factor */
+        t0[a] = J->normalize ? ulo : lo[a];
+        nt[a] = (J->normalize ? uhi : hi[a]) - t0[a] + 1;
+        for (int i = 0; i < nt[a]; i++) {
+            double t = p[a] - (t0[a] + i);
+            d[a][i] = t;
+            d2[a][i] = t * t;
+            w[a][i] = exp2(-2.0 * t * t); /* separable factor */
         }
     }
     double row[MAX_TAPS];
-    double sum = 0.0, sx = 0.0, sy = 0.0, sz = 0.0;
-    for (int k = lo[2]; k <= hi[2]; k++) {
-        int kk = k - lo[2];
+    double sum = 0.0, sx = 0.0, sy = 0.0, sz = 0.0, W = 0.0, wx = 0.0, wy = 0.0, wz = 0.0;
+    for (int kk = 0; kk < nt[2]; kk++) {
+        const int k = t0[2] + kk;
         double rz = J->R2 - d2[2][kk];
         if (rz < 0.0) continue;
-        for (int j = lo[1]; j <= hi[1]; j++) {
-            int jj = j - lo[1];
+        for (int jj = 0; jj < nt[1]; jj++) {
+            const int j = t0[1] + jj;
             double ry = rz - d2[1][jj];
             if (ry < 0.0) continue;
             double wyz = w[1][jj] * w[2][kk];
-            vs_rc_fetch_row(v, j, k, lo[0], hi[0], row, J->base);
-            double rs = 0.0, rx = 0.0;
-            for (int i = 0; i <= hi[0] - lo[0]; i++) {
+            if (nt[0] != hi[0] - lo[0] + 1 || j < lo[1] || j > hi[1] || k < lo[2] || k > hi[2])
+                memset(row, 0, sizeof row); /* normalised: taps outside the volume */
+            if (j >= lo[1] && j <= hi[1] && k >= lo[2] && k <= hi[2])
+                vs_rc_fetch_row(v, j, k, lo[0], hi[0], row + (lo[0] - t0[0]), J->base);
+            double rs = 0.0, rx = 0.0, ks = 0.0, kx = 0.0;
+            for (int i = 0; i < nt[0]; i++) {
                 if (d2[0][i] > ry) continue;
                 double fw = row[i] * w[0][i];
                 rs += fw;
                 rx += fw * d[0][i];
+                if (J->normalize) {
+                    ks += w[0][i];
+                    kx += w[0][i] * d[0][i];
+                }
             }
             sum += rs * wyz;
+            W += ks * wyz;
             if (g) {
                 sx += rx * wyz;
                 sy += rs * wyz * d[1][jj];
                 sz += rs * wyz * d[2][kk];
+                wx += kx * wyz;
+                wy += ks * wyz * d[1][jj];
+                wz += ks * wyz * d[2][kk];
             }
         }
     }
     if (J->normalize) {
-        double dw[3];
-        const double W = lattice_sum(J, p, dw), f = sum / W;
+        const double f = sum / W;
         if (g) { /* (grad S - f grad W) / W */
             const double c = -4.0 * M_LN2 / W;
-            g[0] = c * (sx - f * dw[0]);
-            g[1] = c * (sy - f * dw[1]);
-            g[2] = c * (sz - f * dw[2]);
+            g[0] = c * (sx - f * wx);
+            g[1] = c * (sy - f * wy);
+            g[2] = c * (sz - f * wz);
         }
         return f;
     }
