@@ -191,7 +191,7 @@ int bench_error(const bench_opts *o)
         }
         bench_summary rms = bench_summarize(&ref, bench_m_total);
         /* a Gaussian reference also without the kernel's lattice ripple
-         * (ray_normalize): post-gs follows the plain sum's, post-cd does not */
+         * (ray_normalize), the field post-gs reconstructs (gs_normalize) */
         bench_case nref;
         int have_nref = 0;
         if (!sc->analytic) {

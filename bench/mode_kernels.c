@@ -203,7 +203,7 @@ static double time_kernel(const kernel_entry *k, int n, float *buf, float *ex, f
             } break;
             case 7:
                 /* the sheet rows as (density, gx, gy, gz) pixels */
-                ((vs_classify_gs_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 4 * off, n, &B->T);
+                ((vs_classify_gs_fn)k->fn)(B->alpha + off, B->g + 3 * off, B->q + 4 * off, n, &B->T, NULL);
                 break;
             default:
                 if ((r & 1023) == 0) memset(buf, 0, (size_t)(4 * (64 + n)) * sizeof(float));

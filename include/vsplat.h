@@ -254,6 +254,12 @@ typedef struct vs_settings {
      * which leaves out the lattice ripple the plain sum shows on smooth
      * surfaces and in translucent regions */
     int ray_normalize;
+
+    /* post-gs: 1 (default) the splatted gradient less the value times the
+     * kernel's own lattice ripple (the gradient of the normalised sum, as
+     * ray_normalize's), which leaves out the grid the lattice draws on
+     * smooth surfaces; 0 the plain gradient splats of the paper */
+    int gs_normalize;
 } vs_settings;
 
 typedef struct vs_stage_times {

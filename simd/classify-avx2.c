@@ -117,10 +117,40 @@ void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp
 
 /* post-gs: (density, gx, gy, gz) per pixel, transposed to one vector per
  * channel (pixel order 0 2 4 6 1 3 5 7, put back by one permute each) */
-void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+/* the ripple's v (kernels.h vs_ripple_row) of 8 pixels at the phases C, S */
+static inline void ripple8(const vs_ripple_lanes *L, const float C[3], const float S[3], __m256 v[3])
+{
+    __m256 A[3];
+    for (int a = 0; a < 3; a++) {
+        const float P = L->ca[a] * C[a] + L->cb[a] * S[a], Q = L->cb[a] * C[a] - L->ca[a] * S[a];
+        A[a] = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(P), _mm256_loadu_ps(L->cl[a])),
+                             _mm256_mul_ps(_mm256_set1_ps(Q), _mm256_loadu_ps(L->sl[a])));
+    }
+    for (int j = 0; j < 3; j++)
+        v[j] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(L->m[0][j]), A[0]),
+                                           _mm256_mul_ps(_mm256_set1_ps(L->m[1][j]), A[1])),
+                             _mm256_mul_ps(_mm256_set1_ps(L->m[2][j]), A[2]));
+}
+
+/* the phases on by 8 pixels */
+static inline void turn8(const vs_ripple_lanes *L, float C[3], float S[3])
+{
+    for (int a = 0; a < 3; a++) {
+        const float c = C[a] * L->c8[a] - S[a] * L->s8[a];
+        S[a] = S[a] * L->c8[a] + C[a] * L->s8[a];
+        C[a] = c;
+    }
+}
+
+void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                         const vs_ripple_row *R)
 {
     const __m256i back = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
     const __m256 slab = _mm256_set1_ps(T->slab);
+    float C[3], S[3];
+    __m256 v[3];
+    if (R)
+        for (int a = 0; a < 3; a++) C[a] = R->C[a], S[a] = R->S[a];
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         const float *p = q4 + 4 * i;
@@ -135,9 +165,31 @@ void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const v
         if (T->alpha) {
             int none;
             _mm256_storeu_ps(alpha + i, classify_alpha8(T, d, &none));
-            if (none) continue;
+            if (none) {
+                if (R) turn8(R->L, C, S);
+                continue;
+            }
         }
-        store3(g + 3 * i, _mm256_div_ps(gx, slab), _mm256_div_ps(gy, slab), _mm256_div_ps(gz, slab));
+        if (R) {
+            ripple8(R->L, C, S, v);
+            turn8(R->L, C, S);
+        }
+        gx = _mm256_div_ps(gx, slab);
+        gy = _mm256_div_ps(gy, slab);
+        gz = _mm256_div_ps(gz, slab);
+        if (R) {
+            gx = _mm256_sub_ps(gx, _mm256_mul_ps(d, v[0]));
+            gy = _mm256_sub_ps(gy, _mm256_mul_ps(d, v[1]));
+            gz = _mm256_sub_ps(gz, _mm256_mul_ps(d, v[2]));
+        }
+        store3(g + 3 * i, gx, gy, gz);
     }
-    if (i < n) vs_classify_gs_scalar(alpha + i, g + 3 * i, q4 + 4 * i, n - i, T);
+    if (i == n) return;
+    vs_classify_gs_scalar(alpha + i, g + 3 * i, q4 + 4 * i, n - i, T, NULL);
+    if (!R) return;
+    ripple8(R->L, C, S, v);
+    float vl[3][8];
+    for (int j = 0; j < 3; j++) _mm256_storeu_ps(vl[j], v[j]);
+    for (int l = 0; i + l < n; l++)
+        for (int j = 0; j < 3; j++) g[3 * (i + l) + j] -= q4[4 * (i + l)] * vl[j][l];
 }

@@ -156,6 +156,23 @@ typedef struct vs_placed {
     float rw[VS_PLACE_BATCH][VS_VOXEL1_MAX];
 } vs_placed;
 
+/* Post-gs: the kernel's lattice ripple along one row of a sheet
+ * (src/gs_ripple.h).  Pixel i = 8 c + l of the row gets the vector
+ *   v_j = (m[0][j] A_0 + m[1][j] A_1) + m[2][j] A_2,  A_a = P_a cl[a][l] + Q_a sl[a][l],
+ *   P_a = ca[a] C_a + cb[a] S_a,  Q_a = cb[a] C_a - ca[a] S_a,
+ * where (C_a, S_a) starts at (C[a], S[a]) for c = 0 and turns each 8
+ * pixels: (C c8[a] - S s8[a], S c8[a] + C s8[a]).  All but C and S are
+ * the same for every row of a frame (orthographic) or of a sheet. */
+typedef struct vs_ripple_lanes {
+    float ca[3], cb[3], c8[3], s8[3];
+    float cl[3][8], sl[3][8];
+    float m[3][3];
+} vs_ripple_lanes;
+typedef struct vs_ripple_row {
+    float C[3], S[3];
+    const vs_ripple_lanes *L;
+} vs_ripple_row;
+
 typedef struct vs_kernels {
     vs_isa isa; /* the ISA cap in force (what the stats report) */
     /* row[i] += w * ex[i], i in [0, n) */
@@ -191,8 +208,10 @@ typedef struct vs_kernels {
                         const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
     /* post-gs step 1 over one span of a sheet of (density, three gradient
      * splats) per pixel: alpha[i] = opacity table at q4[4i], and
-     * g[3i + c] = q4[4i + 1 + c] / slab where classify_cd writes it */
-    void (*classify_gs)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+     * g[3i + c] = q4[4i + 1 + c] / slab - q4[4i] v_c(i) (v of R, vs_ripple_row;
+     * R NULL: no such term) where classify_cd writes it */
+    void (*classify_gs)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                        const vs_ripple_row *R);
     /* step 2 (post-cd, post-gs) where alpha[i] > 0: the gradient g[3i..]
      * shaded through the normal LUT (vs_shade_lut_eval) times the colour
      * table at v[i * vstride], plus specular, replaces g[3i..]; other
@@ -270,7 +289,8 @@ typedef unsigned (*vs_place_voxels_fn)(const float *xyz, int stride, int n, cons
 typedef int (*vs_project_brick_fn)(const uint16_t *vox, int n, const vs_project_in *P, uint16_t *keep, float *xyz);
 typedef void (*vs_classify_cd_fn)(float *alpha, float *g, const float *q, const float *qp, const float *qn,
                                   const float *qp2, const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
-typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+typedef void (*vs_classify_gs_fn)(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                                  const vs_ripple_row *R);
 typedef void (*vs_shade_lut_fn)(float *g, const float *alpha, const float *v, int vstride, int n,
                                 const vs_shade_tabs *T);
 typedef void (*vs_shade_terms_fn)(float *d, float *s, const float *g, int n, const vs_shade_tabs *T);
@@ -343,8 +363,10 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
                            const float *qp2, const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
 void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp, const float *qn, const float *qp2,
                          const float *qn2, ptrdiff_t stride, int n, const vs_shade_tabs *T);
-void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
-void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T);
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                           const vs_ripple_row *R);
+void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                         const vs_ripple_row *R);
 
 /* shade: shade_lut, shade_terms */
 void vs_shade_lut_scalar(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T);

@@ -95,13 +95,35 @@ void vs_classify_cd_scalar(float *alpha, float *g, const float *q, const float *
     }
 }
 
-void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                           const vs_ripple_row *R)
 {
     for (int i = 0; i < n; i++) {
         if (T->alpha) alpha[i] = lookup_alpha(T, q4[4 * i]);
         g[3 * i + 0] = q4[4 * i + 1] / T->slab;
         g[3 * i + 1] = q4[4 * i + 2] / T->slab;
         g[3 * i + 2] = q4[4 * i + 3] / T->slab;
+    }
+    if (!R) return;
+    const vs_ripple_lanes *L = R->L;
+    float C[3] = {R->C[0], R->C[1], R->C[2]}, S[3] = {R->S[0], R->S[1], R->S[2]};
+    for (int i0 = 0; i0 < n; i0 += 8) {
+        for (int l = 0; l < 8 && i0 + l < n; l++) {
+            float A[3];
+            for (int a = 0; a < 3; a++) {
+                const float P = L->ca[a] * C[a] + L->cb[a] * S[a], Q = L->cb[a] * C[a] - L->ca[a] * S[a];
+                A[a] = P * L->cl[a][l] + Q * L->sl[a][l];
+            }
+            for (int j = 0; j < 3; j++) {
+                const float v = (L->m[0][j] * A[0] + L->m[1][j] * A[1]) + L->m[2][j] * A[2];
+                g[3 * (i0 + l) + j] -= q4[4 * (i0 + l)] * v;
+            }
+        }
+        for (int a = 0; a < 3; a++) {
+            const float c = C[a] * L->c8[a] - S[a] * L->s8[a];
+            S[a] = S[a] * L->c8[a] + C[a] * L->s8[a];
+            C[a] = c;
+        }
     }
 }
 

@@ -29,7 +29,7 @@ static const size_t settings_ends[] = {
     END_S(ray_step), END_S(ray_trilinear), END_S(ray_analytic), END_S(progress), END_S(progress_user), END_S(trace),
     END_S(view), END_S(has_up), END_S(up), END_S(roll), END_S(has_crop), END_S(crop_lo), END_S(crop_hi),
     END_S(preintegration), END_S(lod_pixels), END_S(resample), END_S(cd_stencil),
-    END_S(ray_normalize)};
+    END_S(ray_normalize), END_S(gs_normalize)};
 static const size_t stats_ends[] = {
     END_T(pipeline), END_T(isa), END_T(threads), END_T(width), END_T(height), END_T(voxels_total),
     END_T(voxels_relevant), END_T(voxels_splatted), END_T(voxels_culled), END_T(sheets),
@@ -42,7 +42,7 @@ static const size_t load_ends[] = {END_L(raw),         END_L(dims),    END_L(typ
                                    END_L(has_spacing), END_L(spacing), END_L(series)};
 
 #define ROUND(n, T) (((n) + _Alignof(T) - 1) / _Alignof(T) * _Alignof(T))
-_Static_assert(ROUND(END_S(ray_normalize), vs_settings) == sizeof(vs_settings),
+_Static_assert(ROUND(END_S(gs_normalize), vs_settings) == sizeof(vs_settings),
                "a field appended to vs_settings: add it to settings_ends");
 _Static_assert(ROUND(END_T(resampled), vs_stats) == sizeof(vs_stats),
                "a field appended to vs_stats: add it to stats_ends");

@@ -78,6 +78,7 @@ void vs_settings_init_sized(vs_settings *out, size_t struct_size, size_t stats_s
     s->occlusion = 1;
     s->preintegration = -1;
     s->lod_pixels = 1.0;
+    s->gs_normalize = 1;
     s->resample = -1;
     s->occlusion_threshold = 0.995;
     s->tile_counters = 1;

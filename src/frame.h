@@ -19,6 +19,20 @@ typedef struct vs_worker_stats {
     double ms_rasterize, ms_gradient, ms_shade, ms_composite;
 } vs_worker_stats;
 
+/* Post-gs: what a frame needs to take the kernel's lattice ripple out of
+ * the splatted gradients (gs_ripple.h). */
+enum { VS_RIPPLE_TAB = 256 };
+typedef struct vs_gs_ripple {
+    int on;
+    double u0[3], ux[3], uy[3], uz[3]; /* index a of the depth-0 image point
+                                          (x, y) at depth z: u0 + ux x + uy y + uz z */
+    vs_ripple_lanes L;    /* axis a's term ca cos 2 pi u + cb sin 2 pi u (u its
+                             index at the slab's front), taken to view space
+                             by m = Minv / slab; orthographic: the lanes
+                             (kernels.h vs_ripple_lanes)                    */
+    float cs[VS_RIPPLE_TAB][2]; /* cos, sin of 2 pi i / TAB               */
+} vs_gs_ripple;
+
 typedef struct vs_frame {
     const vs_settings *s;
     vs_pipeline pipeline;
@@ -108,6 +122,7 @@ typedef struct vs_frame {
     struct vs_span_buf *spans;       /* one per worker when tracing, else NULL   */
     const struct vs_stages *stages;  /* what differs between the pipelines
                                         (pipeline.c)                            */
+    vs_gs_ripple ripple;
 } vs_frame;
 
 /* How far past a voxel's centre (x and y, pixels) its footprint and the

@@ -7,6 +7,7 @@
 #include "finish.h"
 #include "normal_code.h"
 #include "render.h"
+#include "gs_ripple.h"
 #include "pool.h"
 #include "preintegrate.h"
 #include "tile.h"
@@ -401,6 +402,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
                       : s->cd_stencil == 4 ? 1.0f / 12.0f
                                            : vs_cd_wide_z(&F.fp, s->slab);
         F.stages = vs_pipeline_stages(s->pipeline, s->exact_normals, F.preint != NULL, F.cd_wide_z > 0.0f);
+        vs_gs_ripple_setup(&F);
     }
     double t_rel = vs_now_ms();
     if ((rc = vs_relevant_get(ctx, rel_slot, ctx->pool, vol, F.cls, seam, &F.rel, &rebuilt)) != VS_OK) goto fail;

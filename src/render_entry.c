@@ -50,6 +50,8 @@ static vs_status check_settings(vs_context *ctx, const vs_settings *s)
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "resample must be -1 (auto), 0 or 1");
     if (s->cd_stencil != 0 && s->cd_stencil != 2 && s->cd_stencil != 4)
         return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "cd_stencil %d must be 0 (auto), 2 or 4", s->cd_stencil);
+    if (s->gs_normalize != 0 && s->gs_normalize != 1)
+        return vs_set_error(ctx, VS_ERR_INVALID_ARGUMENT, "gs_normalize %d must be 0 or 1", s->gs_normalize);
     return VS_OK;
 }
 

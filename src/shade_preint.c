@@ -24,8 +24,10 @@
 #include "shade.h"
 #include "preintegrate.h"
 #include "sheet_classify.h"
+#include "gs_ripple.h"
 
 #include <float.h>
+#include <limits.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -164,6 +166,8 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const ptrdiff_t st = t->stride;
     batch B;
     B.n = B.ng = 0;
+    vs_ripple_lanes rl; /* post-gs with perspective: sheet k + 1's */
+    int rl_k = INT_MIN;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x0 = sp->xa[y]; x0 < sp->xb[y]; x0 += CHUNK) {
             const int n = sp->xb[y] - x0 < CHUNK ? sp->xb[y] - x0 : CHUNK;
@@ -194,7 +198,10 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                     vb4[i] = n4[4 * i];
                     vm[i] = vs_preint_mid_gs(q4 + 4 * i, n4 + 4 * i);
                 }
-                F->kern.classify_gs(unused, g1[0], n4, n, sv->tabs);
+                vs_ripple_row rr; /* sheet k + 1's */
+                const vs_ripple_row *R =
+                    F->ripple.on ? vs_gs_ripple_at(F, sv->k + 1, x0 + t->ox, y + t->oy, &rr, &rl, &rl_k) : NULL;
+                F->kern.classify_gs(unused, g1[0], n4, n, sv->tabs, R);
             } else {
                 const float *q = sv->q + b0, *qp = sv->prev + b0, *qn = sv->next + b0;
                 vf = q;

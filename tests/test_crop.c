@@ -94,7 +94,9 @@ static void check_case(vs_context *ctx, const vs_volume *vol, vs_settings s, con
         vs_image ib = tu_render(ctx, brick, &b, NULL);
         double pb = tu_psnr(ctx, &ih, &ib), mb = ib.rgba ? tu_max_diff(&ih, &ib) : 1;
         printf("%-28s brick vs whole-volume crop %.1f dB, max %.2g\n", what, pb, mb);
-        CHECK(pb >= 80.0 && mb < 0.02, "%s: the brick does not line up: %.1f dB, max %g", what, pb, mb);
+        /* a gradient on the edge of a normal-LUT bin may land in the next
+         * bin (one such pixel is up to 0.017 off, 77.5 dB at this size) */
+        CHECK(pb >= 75.0 && mb < 0.02, "%s: the brick does not line up: %.1f dB, max %g", what, pb, mb);
         vs_image_free(&ib);
         vs_volume_release(brick);
     }

@@ -349,8 +349,31 @@ static void check_cd_reference(const shade_fixture *F)
            "share\n");
 }
 
+/* a row of post-gs's lattice ripple (kernels.h vs_ripple_row): w[a]
+ * cycles a pixel and phase ph[a] per axis, random terms */
+static void ripple_random(vs_ripple_row *R, vs_ripple_lanes *L, double w[3], double ph[3])
+{
+    for (int a = 0; a < 3; a++) {
+        w[a] = frand();
+        ph[a] = 0.5 * (frand() + 1.0);
+        L->ca[a] = 0.01f * frand();
+        L->cb[a] = 0.01f * frand();
+        for (int j = 0; j < 3; j++) L->m[a][j] = frand();
+        for (int l = 0; l < 8; l++) {
+            L->cl[a][l] = (float)cos(2.0 * M_PI * w[a] * l);
+            L->sl[a][l] = (float)sin(2.0 * M_PI * w[a] * l);
+        }
+        L->c8[a] = (float)cos(2.0 * M_PI * w[a] * 8);
+        L->s8[a] = (float)sin(2.0 * M_PI * w[a] * 8);
+        R->C[a] = (float)cos(2.0 * M_PI * ph[a]);
+        R->S[a] = (float)sin(2.0 * M_PI * ph[a]);
+    }
+    R->L = L;
+}
+
 /* step 1 of post-gs: (density, gradient splats) per pixel; densities as
- * above, gradient splats with zeros, NaN and Inf */
+ * above, gradient splats with zeros, NaN and Inf; without and with a
+ * lattice ripple */
 static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_fixture *F)
 {
     enum { NPIX = MAXN + PAD };
@@ -359,21 +382,57 @@ static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_
     for (int n = 0; n <= MAXN; n++)
         for (int off = 0; off < 4; off++)
             for (int rep = 0; rep < 2; rep++)
-                for (int var = 0; var < 3; var++) {
-                    const vs_shade_tabs T = classify_tabs(F, var);
-                    for (int i = 0; i < NPIX; i++) {
-                        q4[4 * i] = var == 1 ? low_density() : density();
-                        for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
-                        ar[i] = ao[i] = frand();
+                for (int var = 0; var < 3; var++)
+                    for (int rip = 0; rip < 2; rip++) {
+                        const vs_shade_tabs T = classify_tabs(F, var);
+                        vs_ripple_row row;
+                        vs_ripple_lanes lanes;
+                        double w[3], ph[3];
+                        ripple_random(&row, &lanes, w, ph);
+                        for (int i = 0; i < NPIX; i++) {
+                            q4[4 * i] = var == 1 ? low_density() : density();
+                            for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
+                            ar[i] = ao[i] = frand();
+                        }
+                        for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
+                        vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &T, rip ? &row : NULL);
+                        fn(ao + off, go + 3 * off, q4 + 4 * off, n, &T, rip ? &row : NULL);
+                        if (!classified_agree("classify_gs", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
+                        cases++;
                     }
-                    for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
-                    vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &T);
-                    fn(ao + off, go + 3 * off, q4 + 4 * off, n, &T);
-                    if (!classified_agree("classify_gs", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
-                    cases++;
-                }
     if (isa) printf("%-13s %-7s bit-identical to scalar in %d cases\n", "classify_gs", isa, cases);
     return 1;
+}
+
+/* The reference's ripple against its definition in double: pixel i's
+ * gradient less q v(i), v = Minv-like m of the terms ca cos + cb sin at
+ * phase ph + w i (the lanes and the turn by 8 pixels in float) */
+static void check_ripple_reference(const shade_fixture *F)
+{
+    enum { N = 61 };
+    float q4[4 * N], a[N], g[3 * N];
+    double worst = 0.0;
+    for (int rep = 0; rep < 50; rep++) {
+        const vs_shade_tabs T = classify_tabs(F, 2);
+        vs_ripple_row row;
+        vs_ripple_lanes L;
+        double w[3], ph[3];
+        ripple_random(&row, &L, w, ph);
+        for (int i = 0; i < 4 * N; i++) q4[i] = 4.0f * frand();
+        vs_classify_gs_scalar(a, g, q4, N, &T, &row);
+        for (int i = 0; i < N; i++)
+            for (int j = 0; j < 3; j++) {
+                double v = 0.0;
+                for (int x = 0; x < 3; x++) {
+                    const double t = 2.0 * M_PI * (ph[x] + w[x] * i);
+                    v += L.m[x][j] * (L.ca[x] * cos(t) + L.cb[x] * sin(t));
+                }
+                const double want = (double)q4[4 * i + 1 + j] / T.slab - q4[4 * i] * v;
+                worst = fmax(worst, fabs(g[3 * i + j] - want));
+            }
+    }
+    printf("classify_gs   scalar  lattice ripple within %.2g of its definition over %d pixels\n", worst, N);
+    CHECK(worst < 2e-5, "classify_gs's ripple off its definition by %g", worst);
 }
 
 /* step 2: gradients with zeros, tiny, huge, NaN and Inf components,
@@ -542,9 +601,11 @@ static void classify_off(float *alpha, float *g, const float *q, const float *qp
     vs_classify_cd_scalar(alpha, g, q, qp, qn, qp2, qn2, stride, n, T);
     if (n > 5) g[3 * 5 + 2] = nextafterf(g[3 * 5 + 2], INFINITY);
 }
-static void classify_gs_off(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T)
+static void classify_gs_off(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
+                            const vs_ripple_row *R)
 {
-    vs_classify_gs_scalar(alpha, g, q4, n, T);
+    vs_classify_gs_scalar(alpha, g, q4, n, T, R);
+    if (R && n > 11) g[3 * 11] = nextafterf(g[3 * 11], INFINITY);
     if (n > 5) alpha[5] = nextafterf(alpha[5], INFINITY);
 }
 static void shade_off(float *g, const float *alpha, const float *v, int vstride, int n, const vs_shade_tabs *T)
@@ -1104,6 +1165,7 @@ int main(void)
     CHECK(!check_classify(NULL, classify_off, &fx), "check_classify cannot tell a wrong kernel from the reference");
     CHECK(!check_classify_gs(NULL, classify_gs_off, &fx),
           "check_classify_gs cannot tell a wrong kernel from the reference");
+    check_ripple_reference(&fx);
     CHECK(!check_shade(NULL, shade_off, &fx), "check_shade cannot tell a wrong kernel from the reference");
     CHECK(!check_shade_terms(NULL, shade_terms_off, &fx),
           "check_shade_terms cannot tell a wrong kernel from the reference");

@@ -144,14 +144,17 @@ static void test_ramp_gradient(void)
     const int n = 40;
     vs_volume *v = make_volume(n, f_ramp_x);
     vs_tf_point tf[3] = {{0.35, 1, 1, 1, 0.0f}, {0.4, 1, 1, 1, 1.0f}, {1.0, 1, 1, 1, 1.0f}};
-    const vs_pipeline pls[] = {VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS};
+    /* post-cd, post-gs (without the lattice ripple), post-gs with it */
+    const vs_pipeline pls[] = {VS_PIPELINE_POST_CD, VS_PIPELINE_POST_GS, VS_PIPELINE_POST_GS};
     const double azs[] = {-30.0, -60.0, -80.0};
-    for (int p = 0; p < 2; p++)
+    double worst_of[3][3][2];
+    for (int p = 0; p < 3; p++)
         for (int a = 0; a < 3; a++)
             for (int exact = 0; exact <= 1; exact++) {
                 vs_settings s;
                 vs_settings_init(&s);
                 s.pipeline = pls[p];
+                s.gs_normalize = p != 2;
                 s.width = s.height = 64;
                 s.tf = tf;
                 s.tf_count = 3;
@@ -161,6 +164,7 @@ static void test_ramp_gradient(void)
                 s.occlusion = 0;
                 vs_image img;
                 vs_stats st;
+                worst_of[p][a][exact] = INFINITY;
                 if (!render(v, &s, &img, &st)) {
                     tu_failures++;
                     continue;
@@ -172,25 +176,74 @@ static void test_ramp_gradient(void)
                         double c = img.rgba[4 * (y * 64 + x)];
                         if (fabs(c - expect) > worst) worst = fabs(c - expect);
                     }
+                worst_of[p][a][exact] = worst;
                 /* A linear field is reconstructed up to the kernel's ripple
                  * (1 %), and central differences of a linear function are
                  * exact: 0.01 for the exact path.  The LUT adds angle bins
                  * of 360/256 degrees and byte quantisation: d(colour) <=
                  * kd * 1.4 deg = 0.017, so 0.03. */
                 double tol = exact ? 0.015 : 0.03;
-                /* Gradient splats see the kernel's lattice-sum ripple (1 %,
-                 * period one voxel) times the local value undamped: f grad(sum
-                 * h) adds ~2 pi 0.005 f per voxel to the true gradient, which
-                 * for this ramp (0.02 per voxel at f = 0.4) tilts the normal
-                 * by up to ~3 degrees.  Central differences over a pixel and
-                 * a sheet damp it; that is the paper's noted trade-off. */
-                if (pls[p] == VS_PIPELINE_POST_GS) tol = 0.05;
-                printf("ramp %-8s az %2.0f %s: colour error %.4f (expect %.3f)\n", vs_pipeline_name(pls[p]), azs[a],
-                       exact ? "exact" : "lut  ", worst, expect);
+                /* Plain gradient splats see the kernel's lattice-sum ripple
+                 * (period one voxel) times the local value undamped: f
+                 * grad(sum h) adds ~2 pi 0.0016 f per voxel and axis to the
+                 * true gradient, which for this ramp (0.02 per voxel at f =
+                 * 0.4) tilts the normal by up to ~3 degrees.  Central
+                 * differences over a pixel and a sheet damp it. */
+                if (p == 2) tol = 0.05;
+                /* without that first harmonic, the ripple of the kernel's cut
+                 * at radius 2 (below) */
+                if (p == 1) tol = 0.03;
+                printf("ramp %-8s%-7s az %2.0f %s: colour error %.4f (expect %.3f)\n", vs_pipeline_name(pls[p]),
+                       p == 2 ? "+ripple" : "", azs[a], exact ? "exact" : "lut  ", worst, expect);
                 CHECK(worst < tol, "%s az %g exact %d: colour off by %.4f", vs_pipeline_name(pls[p]), azs[a],
                       exact, worst);
                 vs_image_free(&img);
             }
+    /* Normalised (gs_normalize, src/gs_ripple.h), post-gs leaves out the
+     * first harmonic of the ripple; what is left at radius 2 is the ripple
+     * of the kernel's cut (exp(-8 ln 2) = 0.4 % of its peak), which at
+     * radius 3 is 1e-8: there the ramp's shading must be exact and the
+     * plain gradient splats' error must still show. */
+    for (int a = 0; a < 3; a++)
+        for (int exact = 0; exact <= 1; exact++)
+            CHECK(worst_of[1][a][exact] <= worst_of[2][a][exact] + 0.001,
+                  "post-gs az %g exact %d: %.4f without the lattice ripple, %.4f with it", azs[a], exact,
+                  worst_of[1][a][exact], worst_of[2][a][exact]);
+    CHECK(worst_of[1][2][1] < 0.5 * worst_of[2][2][1], "post-gs az -80: %.4f without the ripple, %.4f with it",
+          worst_of[1][2][1], worst_of[2][2][1]);
+    for (int a = 0; a < 3; a++) {
+        double w[2];
+        for (int norm = 0; norm <= 1; norm++) {
+            vs_settings s;
+            vs_settings_init(&s);
+            s.pipeline = VS_PIPELINE_POST_GS;
+            s.gs_normalize = norm;
+            s.kernel_radius = 3.0;
+            s.width = s.height = 64;
+            s.tf = tf;
+            s.tf_count = 3;
+            s.specular = 0.0;
+            s.azimuth = azs[a];
+            s.exact_normals = 1;
+            s.occlusion = 0;
+            vs_image img;
+            vs_stats st;
+            w[norm] = INFINITY;
+            if (!render(v, &s, &img, &st)) {
+                tu_failures++;
+                continue;
+            }
+            const double expect = s.ambient + s.diffuse * fabs(sin(azs[a] * M_PI / 180.0));
+            w[norm] = 0;
+            for (int y = 28; y < 36; y++)
+                for (int x = 28; x < 36; x++) w[norm] = fmax(w[norm], fabs(img.rgba[4 * (y * 64 + x)] - expect));
+            vs_image_free(&img);
+        }
+        printf("ramp post-gs radius 3 az %2.0f exact: colour error %.4f, with the lattice ripple %.4f\n", azs[a],
+               w[1], w[0]);
+        CHECK(w[1] < 0.002 && w[0] > 0.01, "post-gs radius 3 az %g: %.4f without the ripple (< 0.002), %.4f with it",
+              azs[a], w[1], w[0]);
+    }
     vs_volume_release(v);
 }
 

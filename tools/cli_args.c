@@ -78,7 +78,7 @@ enum opt_id {
     O_HELP, O_OUTPUT, O_SCENE, O_PIPELINE, O_ISO, O_RAMP, O_OPACITY, O_MATERIAL, O_BACKGROUND,
     O_TF, O_SIZE, O_VIEW, O_ZOOM, O_PERSPECTIVE, O_CENTER, O_SLAB, O_KRADIUS, O_FOOTPRINT, O_SEAM, O_THREADS,
     O_ISA, O_NO_PIN, O_NO_OCCL, O_OCCL_T, O_NO_TILES, O_TILE_SIZE, O_EXACT_N, O_NORMAL_LUT,
-    O_RAY_STEP, O_TRILINEAR, O_RAY_NORMALIZE, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
+    O_RAY_STEP, O_TRILINEAR, O_RAY_NORMALIZE, O_NO_GS_NORMALIZE, O_NO_ANALYTIC, O_LIGHT, O_AMBIENT, O_DIFFUSE, O_SPECULAR,
     O_SHININESS, O_DIMS, O_TYPE, O_SPACING, O_ENDIAN, O_SERIES, O_BITS, O_STATS, O_PRINT_STATS, O_TRACE, O_QUIET,
     O_TURNTABLE, O_FPS, O_UP, O_ROLL, O_PREINT, O_NO_PREINT, O_LOD, O_NO_LOD, O_RESAMPLE, O_CD_STENCIL
 };
@@ -128,6 +128,7 @@ static const opt_def opt_table[] = {
     {"--preintegration", 0, O_PREINT, 0},
     {"--no-preintegration", 0, O_NO_PREINT, 0},
     {"--cd-stencil", 1, O_CD_STENCIL, 0},
+    {"--no-gs-normalize", 0, O_NO_GS_NORMALIZE, 0},
     {"--lod", 1, O_LOD, 0},
     {"--no-lod", 0, O_NO_LOD, 0},
     {"--resample", 1, O_RESAMPLE, 0},
@@ -401,6 +402,7 @@ static int apply(const opt_def *d, const char *v, cli_opts *o, seen *sn, char *e
     case O_TRILINEAR: s->ray_trilinear = 1; return 0;
     case O_NO_ANALYTIC: s->ray_analytic = 0; return 0;
     case O_RAY_NORMALIZE: s->ray_normalize = 1; return 0;
+    case O_NO_GS_NORMALIZE: s->gs_normalize = 0; return 0;
     case O_LIGHT:
         if (!to_doubles(v, 3, t)) return fail(err, cap, "--light: expected X,Y,Z (direction towards the light), got '%s'", v);
         if (t[0] == 0.0 && t[1] == 0.0 && t[2] == 0.0)
@@ -662,6 +664,8 @@ void cli_render_usage(FILE *f)
             "                         sheet where voxels lie under 1.5 pixels apart on the image,\n"
             "                         across plain sheets from 0.7 pixel a voxel times --slab,\n"
             "                         see vsplat(1))\n"
+            "  --no-gs-normalize      post-gs: the paper's plain gradient splats, with the kernel's\n"
+            "                         lattice ripple (default: the ripple taken out, see vsplat(1))\n"
             "leaving out work:\n"
             "  --lod PX               levels of detail: splat a filtered copy of the volume whose\n"
             "                         voxels lie at most PX pixels apart (default 1)\n"

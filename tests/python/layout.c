@@ -36,6 +36,7 @@ int main(void)
     F(vs_settings, view); F(vs_settings, has_up); F(vs_settings, up); F(vs_settings, roll);
     F(vs_settings, has_crop); F(vs_settings, crop_lo); F(vs_settings, crop_hi); F(vs_settings, preintegration);
     F(vs_settings, lod_pixels); F(vs_settings, resample); F(vs_settings, cd_stencil); F(vs_settings, ray_normalize);
+    F(vs_settings, gs_normalize);
     END();
     BEGIN(vs_stats);
     F(vs_stats, struct_size); F(vs_stats, pipeline); F(vs_stats, isa); F(vs_stats, threads); F(vs_stats, width);

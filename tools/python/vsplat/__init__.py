@@ -368,7 +368,9 @@ def render(volume, pipeline="post-cd", iso=None, ramp=None, tf=None, size=None, 
               cd_stencil=2 (post-cd: the paper's two-point differences
               at any size; 4 the four-point stencils; 0 auto),
               ray_normalize=1 (pipeline "raycast": Gaussian weights over
-              their sum, without the kernel's lattice ripple)
+              their sum, without the kernel's lattice ripple),
+              gs_normalize=0 (post-gs: the plain gradient splats, with that
+              ripple)
 
     The GIL is released while the frame renders.
     """

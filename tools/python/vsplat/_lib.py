@@ -62,6 +62,7 @@ class Settings(ctypes.Structure):
         ("resample", c_int),
         ("cd_stencil", c_int),
         ("ray_normalize", c_int),
+        ("gs_normalize", c_int),
     ]
 
 
