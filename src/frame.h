@@ -28,7 +28,7 @@ typedef struct vs_gs_ripple {
                                           (x, y) at depth z: u0 + ux x + uy y + uz z */
     vs_ripple_lanes L;    /* axis a's term ca cos 2 pi u + cb sin 2 pi u (u its
                              index at the slab's front), taken to view space
-                             by m = Minv / slab; orthographic: the lanes
+                             by m = Minv / slab^2; orthographic: the lanes
                              (kernels.h vs_ripple_lanes)                    */
     float cs[VS_RIPPLE_TAB][2]; /* cos, sin of 2 pi i / TAB               */
 } vs_gs_ripple;

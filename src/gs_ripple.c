@@ -3,22 +3,24 @@
  * The kernel h(u) = b exp(-a |u|^2) summed over the lattice is
  * b prod_a theta(u_a), theta(x) = sum_n exp(-a (x - n)^2), whose Fourier
  * series is sqrt(pi / a) (1 + c cos 2 pi x + ...) with c = 2 exp(-pi^2 / a)
- * (1.6e-3; the next term is exp(-4 pi^2 / a), 4e-13).  To first order in c
+ * (1.6e-3; the next term's is 2 exp(-4 pi^2 / a), 8.6e-13).  To first order in c
  * the sum is 1 + c sum_a cos 2 pi u_a, and its gradient per index axis
- * -2 pi c sin 2 pi u_a.  A sheet holds the kernel integrated over its slab
- * along the view direction e (index per view unit): over the slab from u
- * that gradient integrates to A_a(u) = c (cos 2 pi (u_a + s e_a) -
- * cos 2 pi u_a) / e_a, and in view space (pixels, view units) the lattice
- * sum's gradient over its value is V = Minv^T A / s (the value is s to
- * first order).  A splatted gradient of values q becomes g - q V: the
- * gradient of the normalised reconstruction S / W, up to the factor 1 / W
- * (1 +- 0.5 %), which shading does not see. */
+ * -2 pi c sin 2 pi u_a.  A sheet holds the kernel averaged over its slab
+ * along the view direction e (index per view unit; the splat weights are
+ * b / s): over the slab from u that gradient integrates to A_a(u) = c
+ * (cos 2 pi (u_a + s e_a) - cos 2 pi u_a) / e_a, so the sheet's ripple
+ * gradient in view space (pixels, view units) is Minv^T A / s over a value
+ * of 1 to first order.  classify_gs divides the splatted gradient by s
+ * once more (g = grad S / s), so a pixel of value q takes g - q Minv^T A /
+ * s^2: the gradient of the normalised reconstruction S / W over s, up to
+ * the factor 1 / W (1 +- 0.5 %), which shading does not see. */
 #include "gs_ripple.h"
 
 #include <math.h>
 
 /* cos and sin of 2 pi u: the table's entry below u and the rest by its
- * Taylor series (under 0.025 rad: error under 2e-8) */
+ * Taylor series (under 0.025 rad: series error under 2e-8, float rounding
+ * about 6e-8) */
 static inline void sincos_2pi(const vs_gs_ripple *r, double u, float *c, float *s)
 {
     double f = (u - floor(u)) * VS_RIPPLE_TAB;
@@ -42,15 +44,12 @@ static void lanes(double w, float cl[8], float sl[8], float *c8, float *s8)
 }
 
 /* the lanes of a sheet whose pixels are 1 / isk apart at depth 0 (1:
- * orthographic), its in-sheet gradient per sheet pixel */
+ * orthographic); its gradients stay per pixel at depth 0, as post-gs
+ * splats them */
 static void sheet_lanes(const vs_gs_ripple *r, double isk, vs_ripple_lanes *L)
 {
     *L = r->L;
-    for (int a = 0; a < 3; a++) {
-        lanes(r->ux[a] * isk, L->cl[a], L->sl[a], &L->c8[a], &L->s8[a]);
-        L->m[a][0] = (float)(r->L.m[a][0] * isk);
-        L->m[a][1] = (float)(r->L.m[a][1] * isk);
-    }
+    for (int a = 0; a < 3; a++) lanes(r->ux[a] * isk, L->cl[a], L->sl[a], &L->c8[a], &L->s8[a]);
 }
 
 void vs_gs_ripple_setup(vs_frame *F)
@@ -71,9 +70,9 @@ void vs_gs_ripple_setup(vs_frame *F)
         r->u0[a] = -(cam->Minv[a][0] * cam->t[0] + cam->Minv[a][1] * cam->t[1] + cam->Minv[a][2] * cam->t[2]);
         /* A(u) = c (cos 2 pi (u + s e) - cos 2 pi u) / e as ca cos 2 pi u + cb sin 2 pi u */
         const double e = cam->Minv[a][2], w = 2.0 * M_PI * s * e;
-        r->L.ca[a] = (float)(fabs(w) > 1e-6 ? c * (cos(w) - 1.0) / e : -c * M_PI * w * s);
+        r->L.ca[a] = (float)(fabs(w) > 1e-6 ? -2.0 * c * sin(0.5 * w) * sin(0.5 * w) / e : -c * M_PI * w * s);
         r->L.cb[a] = (float)(fabs(w) > 1e-6 ? -c * sin(w) / e : -2.0 * M_PI * c * s);
-        for (int j = 0; j < 3; j++) r->L.m[a][j] = (float)(cam->Minv[a][j] / s);
+        for (int j = 0; j < 3; j++) r->L.m[a][j] = (float)(cam->Minv[a][j] / (s * s));
         lanes(r->ux[a], r->L.cl[a], r->L.sl[a], &r->L.c8[a], &r->L.s8[a]);
     }
 }

@@ -211,7 +211,9 @@ static void test_ramp_gradient(void)
                   worst_of[1][a][exact], worst_of[2][a][exact]);
     CHECK(worst_of[1][2][1] < 0.5 * worst_of[2][2][1], "post-gs az -80: %.4f without the ripple, %.4f with it",
           worst_of[1][2][1], worst_of[2][2][1]);
-    for (int a = 0; a < 3; a++) {
+    /* slabs of 1, 0.5 and 2 voxels (the ripple is integrated over the slab) */
+    const double slabs[4] = {1.0, 0.5, 2.0, 1.0};
+    for (int a = 0; a < 4; a++) {
         double w[2];
         for (int norm = 0; norm <= 1; norm++) {
             vs_settings s;
@@ -219,11 +221,13 @@ static void test_ramp_gradient(void)
             s.pipeline = VS_PIPELINE_POST_GS;
             s.gs_normalize = norm;
             s.kernel_radius = 3.0;
+            s.slab = slabs[a];
+            s.azimuth = azs[a % 3];
+            s.perspective_fov = a == 3 ? 30.0 : 0.0; /* and with perspective */
             s.width = s.height = 64;
             s.tf = tf;
             s.tf_count = 3;
             s.specular = 0.0;
-            s.azimuth = azs[a];
             s.exact_normals = 1;
             s.occlusion = 0;
             vs_image img;
@@ -233,16 +237,17 @@ static void test_ramp_gradient(void)
                 tu_failures++;
                 continue;
             }
-            const double expect = s.ambient + s.diffuse * fabs(sin(azs[a] * M_PI / 180.0));
+            const double expect = s.ambient + s.diffuse * fabs(sin(azs[a % 3] * M_PI / 180.0));
             w[norm] = 0;
             for (int y = 28; y < 36; y++)
                 for (int x = 28; x < 36; x++) w[norm] = fmax(w[norm], fabs(img.rgba[4 * (y * 64 + x)] - expect));
             vs_image_free(&img);
         }
-        printf("ramp post-gs radius 3 az %2.0f exact: colour error %.4f, with the lattice ripple %.4f\n", azs[a],
-               w[1], w[0]);
-        CHECK(w[1] < 0.002 && w[0] > 0.01, "post-gs radius 3 az %g: %.4f without the ripple (< 0.002), %.4f with it",
-              azs[a], w[1], w[0]);
+        printf("ramp post-gs radius 3 slab %g az %2.0f%s exact: colour error %.4f, with the lattice ripple %.4f\n",
+               slabs[a], azs[a % 3], a == 3 ? " perspective 30" : "", w[1], w[0]);
+        CHECK(w[1] < 0.002 && w[0] > 0.01,
+              "post-gs radius 3 slab %g az %g case %d: %.4f without the ripple (< 0.002), %.4f with it", slabs[a],
+              azs[a % 3], a, w[1], w[0]);
     }
     vs_volume_release(v);
 }
