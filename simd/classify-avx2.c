@@ -117,29 +117,58 @@ void vs_classify_cd_avx2(float *alpha, float *g, const float *q, const float *qp
 
 /* post-gs: (density, gx, gy, gz) per pixel, transposed to one vector per
  * channel (pixel order 0 2 4 6 1 3 5 7, put back by one permute each) */
-/* the ripple's v (kernels.h vs_ripple_row) of 8 pixels at the phases C, S */
-static inline void ripple8(const vs_ripple_lanes *L, const float C[3], const float S[3], __m256 v[3])
+/* the ripple's v (kernels.h vs_ripple_row) of block c's 8 pixels */
+static inline void ripple8(const vs_ripple_row *R, int c, __m256 v[3])
 {
+    const vs_ripple_lanes *L = R->L;
+    float P[3], Q[3];
+    vs_ripple_block(R, c, P, Q);
     __m256 A[3];
-    for (int a = 0; a < 3; a++) {
-        const float P = L->ca[a] * C[a] + L->cb[a] * S[a], Q = L->cb[a] * C[a] - L->ca[a] * S[a];
-        A[a] = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(P), _mm256_loadu_ps(L->cl[a])),
-                             _mm256_mul_ps(_mm256_set1_ps(Q), _mm256_loadu_ps(L->sl[a])));
-    }
+    for (int a = 0; a < 3; a++)
+        A[a] = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(P[a]), _mm256_loadu_ps(L->cl[a])),
+                             _mm256_mul_ps(_mm256_set1_ps(Q[a]), _mm256_loadu_ps(L->sl[a])));
     for (int j = 0; j < 3; j++)
         v[j] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(L->m[0][j]), A[0]),
                                            _mm256_mul_ps(_mm256_set1_ps(L->m[1][j]), A[1])),
                              _mm256_mul_ps(_mm256_set1_ps(L->m[2][j]), A[2]));
 }
 
-/* the phases on by 8 pixels */
-static inline void turn8(const vs_ripple_lanes *L, float C[3], float S[3])
+/* The ripple of a span's 8 pixels from i (i a multiple of 8): lanes m..7
+ * of block i / 8 then 0..m-1 of the next.  The next block's, made for a
+ * span not aligned to the blocks, is kept in nx for the pixels from i + 8
+ * (*have: the block it holds, -1 none). */
+typedef struct ripple_span {
+    __m256i idx;  /* lane l takes lane (l + m) & 7 */
+    __m256 from_next; /* lanes l >= 8 - m: from the next block */
+    __m256 nx[3];
+    int have;
+} ripple_span;
+
+static inline void ripple_span_init(ripple_span *rs, int m)
 {
-    for (int a = 0; a < 3; a++) {
-        const float c = C[a] * L->c8[a] - S[a] * L->s8[a];
-        S[a] = S[a] * L->c8[a] + C[a] * L->s8[a];
-        C[a] = c;
+    const __m256i l = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    rs->idx = _mm256_and_si256(_mm256_add_epi32(l, _mm256_set1_epi32(m)), _mm256_set1_epi32(7));
+    rs->from_next = _mm256_castsi256_ps(_mm256_cmpgt_epi32(l, _mm256_set1_epi32(7 - m)));
+    rs->have = -1;
+}
+
+static inline void ripple_at(const vs_ripple_row *R, ripple_span *rs, int i, __m256 v[3])
+{
+    const int c = i >> 3;
+    if (!R->m) {
+        ripple8(R, c, v);
+        return;
     }
+    __m256 cur[3];
+    if (rs->have == c)
+        for (int j = 0; j < 3; j++) cur[j] = rs->nx[j];
+    else
+        ripple8(R, c, cur);
+    ripple8(R, c + 1, rs->nx);
+    rs->have = c + 1;
+    for (int j = 0; j < 3; j++)
+        v[j] = _mm256_blendv_ps(_mm256_permutevar8x32_ps(cur[j], rs->idx), _mm256_permutevar8x32_ps(rs->nx[j], rs->idx),
+                                rs->from_next);
 }
 
 void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const vs_shade_tabs *T,
@@ -147,10 +176,9 @@ void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const v
 {
     const __m256i back = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
     const __m256 slab = _mm256_set1_ps(T->slab);
-    float C[3], S[3];
     __m256 v[3];
-    if (R)
-        for (int a = 0; a < 3; a++) C[a] = R->C[a], S[a] = R->S[a];
+    ripple_span rs;
+    if (R) ripple_span_init(&rs, R->m);
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         const float *p = q4 + 4 * i;
@@ -165,15 +193,9 @@ void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const v
         if (T->alpha) {
             int none;
             _mm256_storeu_ps(alpha + i, classify_alpha8(T, d, &none));
-            if (none) {
-                if (R) turn8(R->L, C, S);
-                continue;
-            }
+            if (none) continue;
         }
-        if (R) {
-            ripple8(R->L, C, S, v);
-            turn8(R->L, C, S);
-        }
+        if (R) ripple_at(R, &rs, i, v);
         gx = _mm256_div_ps(gx, slab);
         gy = _mm256_div_ps(gy, slab);
         gz = _mm256_div_ps(gz, slab);
@@ -187,7 +209,7 @@ void vs_classify_gs_avx2(float *alpha, float *g, const float *q4, int n, const v
     if (i == n) return;
     vs_classify_gs_scalar(alpha + i, g + 3 * i, q4 + 4 * i, n - i, T, NULL);
     if (!R) return;
-    ripple8(R->L, C, S, v);
+    ripple_at(R, &rs, i, v);
     float vl[3][8];
     for (int j = 0; j < 3; j++) _mm256_storeu_ps(vl[j], v[j]);
     for (int l = 0; i + l < n; l++)

@@ -157,21 +157,39 @@ typedef struct vs_placed {
 } vs_placed;
 
 /* Post-gs: the kernel's lattice ripple along one row of a sheet
- * (src/gs_ripple.h).  Pixel i = 8 c + l of the row gets the vector
+ * (src/gs_ripple.h).  The row is taken in blocks of 8 pixels anchored at
+ * absolute image x (block b: x = 8 b .. 8 b + 7), so that a pixel's term
+ * is a function of the pixel alone, not of where its span starts (which
+ * the tile decides).  Pixel i of a span is lane l = (m + i) & 7 of block
+ * c = (m + i) >> 3, counted from the block of its first pixel, and gets
  *   v_j = (m[0][j] A_0 + m[1][j] A_1) + m[2][j] A_2,  A_a = P_a cl[a][l] + Q_a sl[a][l],
- *   P_a = ca[a] C_a + cb[a] S_a,  Q_a = cb[a] C_a - ca[a] S_a,
- * where (C_a, S_a) starts at (C[a], S[a]) for c = 0 and turns each 8
- * pixels: (C c8[a] - S s8[a], S c8[a] + C s8[a]).  All but C and S are
- * the same for every row of a frame (orthographic) or of a sheet. */
+ * with P, Q of block c from vs_ripple_block: the row's phase (C, S) at
+ * x = 0 turned by the block's xr[c] (cos, sin of each axis's phase at its
+ * first pixel), then the terms ca, cb.  All but C, S, xr and m are the
+ * same for every row of a frame (orthographic) or of a sheet. */
 typedef struct vs_ripple_lanes {
-    float ca[3], cb[3], c8[3], s8[3];
+    float ca[3], cb[3];
     float cl[3][8], sl[3][8];
     float m[3][3];
 } vs_ripple_lanes;
 typedef struct vs_ripple_row {
     float C[3], S[3];
+    const float (*xr)[6]; /* block c's turn: cos of axis a at [c][a], sin at [c][3 + a] */
+    int m;                /* the span's first pixel's lane in its block */
     const vs_ripple_lanes *L;
 } vs_ripple_row;
+
+/* P and Q (above) of block c: the one formula every kernel follows. */
+static inline void vs_ripple_block(const vs_ripple_row *R, int c, float P[3], float Q[3])
+{
+    const vs_ripple_lanes *L = R->L;
+    for (int a = 0; a < 3; a++) {
+        const float xc = R->xr[c][a], xs = R->xr[c][3 + a];
+        const float C = R->C[a] * xc - R->S[a] * xs, S = R->S[a] * xc + R->C[a] * xs;
+        P[a] = L->ca[a] * C + L->cb[a] * S;
+        Q[a] = L->cb[a] * C - L->ca[a] * S;
+    }
+}
 
 typedef struct vs_kernels {
     vs_isa isa; /* the ISA cap in force (what the stats report) */

@@ -106,23 +106,16 @@ void vs_classify_gs_scalar(float *alpha, float *g, const float *q4, int n, const
     }
     if (!R) return;
     const vs_ripple_lanes *L = R->L;
-    float C[3] = {R->C[0], R->C[1], R->C[2]}, S[3] = {R->S[0], R->S[1], R->S[2]};
-    for (int i0 = 0; i0 < n; i0 += 8) {
-        for (int l = 0; l < 8 && i0 + l < n; l++) {
-            float A[3];
-            for (int a = 0; a < 3; a++) {
-                const float P = L->ca[a] * C[a] + L->cb[a] * S[a], Q = L->cb[a] * C[a] - L->ca[a] * S[a];
-                A[a] = P * L->cl[a][l] + Q * L->sl[a][l];
-            }
-            for (int j = 0; j < 3; j++) {
-                const float v = (L->m[0][j] * A[0] + L->m[1][j] * A[1]) + L->m[2][j] * A[2];
-                g[3 * (i0 + l) + j] -= q4[4 * (i0 + l)] * v;
-            }
-        }
-        for (int a = 0; a < 3; a++) {
-            const float c = C[a] * L->c8[a] - S[a] * L->s8[a];
-            S[a] = S[a] * L->c8[a] + C[a] * L->s8[a];
-            C[a] = c;
+    float P[3], Q[3];
+    if (n > 0) vs_ripple_block(R, R->m >> 3, P, Q);
+    for (int i = 0; i < n; i++) {
+        const int c = (R->m + i) >> 3, l = (R->m + i) & 7;
+        if (i > 0 && l == 0) vs_ripple_block(R, c, P, Q);
+        float A[3];
+        for (int a = 0; a < 3; a++) A[a] = P[a] * L->cl[a][l] + Q[a] * L->sl[a][l];
+        for (int j = 0; j < 3; j++) {
+            const float v = (L->m[0][j] * A[0] + L->m[1][j] * A[1]) + L->m[2][j] * A[2];
+            g[3 * i + j] -= q4[4 * i] * v;
         }
     }
 }

@@ -16,6 +16,7 @@
  * the factor 1 / W (1 +- 0.5 %), which shading does not see. */
 #include "gs_ripple.h"
 
+#include <limits.h>
 #include <math.h>
 
 /* cos and sin of 2 pi u: the table's entry below u and the rest by its
@@ -32,24 +33,13 @@ static inline void sincos_2pi(const vs_gs_ripple *r, double u, float *c, float *
     *s = r->cs[i][1] * cd + r->cs[i][0] * sd;
 }
 
-/* cos and sin of 2 pi w l for the lanes l < 8, and of 2 pi w 8 */
-static void lanes(double w, float cl[8], float sl[8], float *c8, float *s8)
+/* cos and sin of 2 pi w l for the lanes l < 8 */
+static void lanes(double w, float cl[8], float sl[8])
 {
     for (int l = 0; l < 8; l++) {
         cl[l] = (float)cos(2.0 * M_PI * w * l);
         sl[l] = (float)sin(2.0 * M_PI * w * l);
     }
-    *c8 = (float)cos(2.0 * M_PI * w * 8);
-    *s8 = (float)sin(2.0 * M_PI * w * 8);
-}
-
-/* the lanes of a sheet whose pixels are 1 / isk apart at depth 0 (1:
- * orthographic); its gradients stay per pixel at depth 0, as post-gs
- * splats them */
-static void sheet_lanes(const vs_gs_ripple *r, double isk, vs_ripple_lanes *L)
-{
-    *L = r->L;
-    for (int a = 0; a < 3; a++) lanes(r->ux[a] * isk, L->cl[a], L->sl[a], &L->c8[a], &L->s8[a]);
 }
 
 void vs_gs_ripple_setup(vs_frame *F)
@@ -73,29 +63,70 @@ void vs_gs_ripple_setup(vs_frame *F)
         r->L.ca[a] = (float)(fabs(w) > 1e-6 ? -2.0 * c * sin(0.5 * w) * sin(0.5 * w) / e : -c * M_PI * w * s);
         r->L.cb[a] = (float)(fabs(w) > 1e-6 ? -c * sin(w) / e : -2.0 * M_PI * c * s);
         for (int j = 0; j < 3; j++) r->L.m[a][j] = (float)(cam->Minv[a][j] / (s * s));
-        lanes(r->ux[a], r->L.cl[a], r->L.sl[a], &r->L.c8[a], &r->L.s8[a]);
+        lanes(r->ux[a], r->L.cl[a], r->L.sl[a]);
     }
 }
 
-const vs_ripple_row *vs_gs_ripple_at(const vs_frame *F, int k, int x, int y, vs_ripple_row *R, vs_ripple_lanes *sheet,
-                                     int *sheet_k)
+/* floor(x / 8) for any int */
+static inline int block_of(int x) { return x >= 0 ? x / 8 : -((7 - x) / 8); }
+
+size_t vs_gs_ripple_tile_floats(int tw, int th) { return 6 * ((size_t)tw / 8 + 3 + (size_t)th); }
+
+void vs_gs_ripple_tile_init(vs_gs_ripple_tile *T, float *tables, int x0, int y0, int tw, int th)
+{
+    T->k = T->kc = INT_MIN;
+    T->b0 = block_of(x0);
+    /* the own columns' blocks and one past them (a span's last vector
+     * reads it): at most tw / 8 + 3 */
+    T->nb = block_of(x0 + tw - 1) + 2 - T->b0;
+    T->y0 = y0;
+    T->nr = th;
+    T->xr = (float(*)[6])tables;
+    T->yr = T->xr + T->nb;
+}
+
+/* The tables for sheet k.  With perspective a sheet's pixels are 1 / sk
+ * apart at depth 0: pixel (x, y) lies at (cx (1 - isk) + isk x, cy (1 -
+ * isk) + isk y) there. */
+static void tile_tables(const vs_frame *F, int k, vs_gs_ripple_tile *T)
 {
     const vs_gs_ripple *r = &F->ripple;
     const vs_camera *cam = &F->cam;
-    double x0 = x, y0 = y;
-    R->L = &r->L;
+    const double isk = cam->persp ? 1.0 / vs_camera_sheet_scale(cam, k, F->fp.slab) : 1.0;
+    T->k = k;
+    T->kc = INT_MIN;
     if (cam->persp) {
-        /* sheet k's pixels seen from their depth-0 points, a pixel being
-         * 1 / sk there */
-        const double isk = 1.0 / vs_camera_sheet_scale(cam, k, F->fp.slab);
-        x0 = cam->cx + (x - cam->cx) * isk;
-        y0 = cam->cy + (y - cam->cy) * isk;
-        if (*sheet_k != k) sheet_lanes(r, isk, sheet);
-        *sheet_k = k;
-        R->L = sheet;
+        T->L = r->L;
+        for (int a = 0; a < 3; a++) lanes(r->ux[a] * isk, T->L.cl[a], T->L.sl[a]);
     }
-    const double z = k * F->fp.slab;
-    for (int a = 0; a < 3; a++)
-        sincos_2pi(r, r->u0[a] + r->ux[a] * x0 + r->uy[a] * y0 + r->uz[a] * z, &R->C[a], &R->S[a]);
+    for (int b = 0; b < T->nb; b++)
+        for (int a = 0; a < 3; a++) sincos_2pi(r, r->ux[a] * isk * 8.0 * (T->b0 + b), &T->xr[b][a], &T->xr[b][3 + a]);
+    for (int y = 0; y < T->nr; y++)
+        for (int a = 0; a < 3; a++) sincos_2pi(r, r->uy[a] * isk * (T->y0 + y), &T->yr[y][a], &T->yr[y][3 + a]);
+}
+
+const vs_ripple_row *vs_gs_ripple_at(const vs_frame *F, int k, int x, int y, vs_ripple_row *R, vs_gs_ripple_tile *T)
+{
+    const vs_gs_ripple *r = &F->ripple;
+    const vs_camera *cam = &F->cam;
+    if (T->k == INT_MIN || (cam->persp && T->k != k)) tile_tables(F, k, T);
+    if (T->kc != k) {
+        /* the phase of pixel (0, 0) at sheet k */
+        const double isk = cam->persp ? 1.0 / vs_camera_sheet_scale(cam, k, F->fp.slab) : 1.0;
+        const double ox = cam->persp ? cam->cx * (1.0 - isk) : 0.0, oy = cam->persp ? cam->cy * (1.0 - isk) : 0.0;
+        for (int a = 0; a < 3; a++)
+            sincos_2pi(r, r->u0[a] + r->ux[a] * ox + r->uy[a] * oy + r->uz[a] * (k * F->fp.slab), &T->C0[a], &T->S0[a]);
+        T->kc = k;
+    }
+    /* the row's phase at x = 0: sheet k's at (0, 0) turned by row y's */
+    const float *yr = T->yr[y - T->y0];
+    for (int a = 0; a < 3; a++) {
+        R->C[a] = T->C0[a] * yr[a] - T->S0[a] * yr[3 + a];
+        R->S[a] = T->S0[a] * yr[a] + T->C0[a] * yr[3 + a];
+    }
+    R->L = cam->persp ? &T->L : &r->L;
+    const int b = block_of(x);
+    R->xr = (const float(*)[6])T->xr + (b - T->b0);
+    R->m = x - 8 * b;
     return R;
 }

@@ -27,7 +27,6 @@
 #include "gs_ripple.h"
 
 #include <float.h>
-#include <limits.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -166,8 +165,6 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const ptrdiff_t st = t->stride;
     batch B;
     B.n = B.ng = 0;
-    vs_ripple_lanes rl; /* post-gs with perspective: sheet k + 1's */
-    int rl_k = INT_MIN;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x0 = sp->xa[y]; x0 < sp->xb[y]; x0 += CHUNK) {
             const int n = sp->xb[y] - x0 < CHUNK ? sp->xb[y] - x0 : CHUNK;
@@ -200,7 +197,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 }
                 vs_ripple_row rr; /* sheet k + 1's */
                 const vs_ripple_row *R =
-                    F->ripple.on ? vs_gs_ripple_at(F, sv->k + 1, x0 + t->ox, y + t->oy, &rr, &rl, &rl_k) : NULL;
+                    t->ripple ? vs_gs_ripple_at(F, sv->k + 1, x0 + t->ox, y + t->oy, &rr, t->ripple) : NULL;
                 F->kern.classify_gs(unused, g1[0], n4, n, sv->tabs, R);
             } else {
                 const float *q = sv->q + b0, *qp = sv->prev + b0, *qn = sv->next + b0;

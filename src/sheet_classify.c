@@ -9,7 +9,6 @@
 #include "occlusion.h"
 #include "preintegrate.h"
 
-#include <limits.h>
 
 /* With a transfer function that makes value 0 visible, sheet pixels whose
  * slab centre lies outside the volume (where nothing was splatted, so q = 0)
@@ -94,14 +93,12 @@ uint64_t vs_classify_post_gs(const tile_ctx *t, const sheet_view *sv, shade_buf 
     const vs_frame *F = t->F;
     const spans *sp = sv->sp;
     vs_ripple_row rr;
-    vs_ripple_lanes rl;
-    int rl_k = INT_MIN;
     for (int y = sp->y0; y < sp->y1; y++) {
         if (sp->xa[y] == sp->xb[y]) continue;
         int o = vs_own(t, sp->xa[y], y);
         size_t b = (size_t)y * t->stride + sp->xa[y];
         const vs_ripple_row *R =
-            F->ripple.on ? vs_gs_ripple_at(F, sv->k, sp->xa[y] + t->ox, y + t->oy, &rr, &rl, &rl_k) : NULL;
+            t->ripple ? vs_gs_ripple_at(F, sv->k, sp->xa[y] + t->ox, y + t->oy, &rr, t->ripple) : NULL;
         F->kern.classify_gs(sb.alpha + o, sb.g + 3 * o, sv->q + 4 * b, sp->xb[y] - sp->xa[y], sv->tabs, R);
         if (F->preint)
             vs_preint_alpha_row_gs(F->preint, &F->kern, (float)F->base, sb.alpha + o, sv->q + 4 * b, sv->next + 4 * b,

@@ -12,6 +12,7 @@
  * every thread count. */
 #include "timing.h"
 #include "activate.h"
+#include "gs_ripple.h"
 #include "composite.h"
 #include "occlusion.h"
 #include "shade.h"
@@ -161,6 +162,8 @@ void vs_tile_render(void *arg, int worker, int task)
     const size_t o_bbox = take(&c, (size_t)R * sizeof(rect));
     const size_t o_blk = take(&c, nblk * sizeof(float));
     const size_t o_ex = take(&c, (size_t)t.bw * sizeof(float));
+    const size_t o_rip = take(&c, F->ripple.on ? sizeof(vs_gs_ripple_tile) : 0);
+    const size_t o_ript = take(&c, F->ripple.on ? vs_gs_ripple_tile_floats(t.tw, t.th) * sizeof(float) : 0);
     if (!scratch_reserve(scr, c.off, zero)) {
         atomic_store(&F->error, 1);
         atomic_fetch_add(&F->tiles_done, 1);
@@ -185,6 +188,11 @@ void vs_tile_render(void *arg, int worker, int task)
     rect *bbox = (rect *)(A + o_bbox);
     t.blk = nblk ? (float *)(A + o_blk) : NULL;
     t.ex = (float *)(A + o_ex);
+    t.ripple = NULL;
+    if (F->ripple.on) {
+        t.ripple = (vs_gs_ripple_tile *)(A + o_rip);
+        vs_gs_ripple_tile_init(t.ripple, (float *)(A + o_ript), t.x0, t.y0, t.tw, t.th);
+    }
     memset(acc, 0, (size_t)npix * 4 * sizeof(float));
     /* sb.g needs no clearing: a pixel's colour is read only where its
      * opacity is not 0, and then shading wrote it on this sheet; only the

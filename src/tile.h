@@ -60,6 +60,8 @@ typedef struct tile_ctx {
     float ry0;           /* footprint half-height without shift              */
     float *blk;          /* scratch: one voxel's footprint block             */
     float *ex;           /* scratch: one footprint row of weights (bw)       */
+    struct vs_gs_ripple_tile *ripple; /* post-gs: its rows' lattice ripple
+                            (gs_ripple.h), or NULL                           */
     vs_worker_stats *ws; /* the worker's counters                            */
 } tile_ctx;
 

@@ -350,25 +350,43 @@ static void check_cd_reference(const shade_fixture *F)
 }
 
 /* a row of post-gs's lattice ripple (kernels.h vs_ripple_row): w[a]
- * cycles a pixel and phase ph[a] per axis, random terms */
-static void ripple_random(vs_ripple_row *R, vs_ripple_lanes *L, double w[3], double ph[3])
+ * cycles a pixel and phase ph[a] per axis at x = 0, random terms; the
+ * span starts at pixel x = 8 b0 + m of the row (random block b0 and lane
+ * m), so pixel i of the span lies at phase ph + w (x + i) */
+enum { RIPPLE_BLOCKS = (MAXN + 8) / 8 + 2 };
+typedef struct ripple_case {
+    vs_ripple_row R;
+    vs_ripple_lanes L;
+    float xr[RIPPLE_BLOCKS][6];
+    double w[3], ph[3];
+    int x; /* the span's first pixel */
+} ripple_case;
+
+static void ripple_random(ripple_case *rc)
 {
+    const int b0 = (int)(rand() % 1000), m = (int)(rand() % 8);
+    rc->x = 8 * b0 + m;
     for (int a = 0; a < 3; a++) {
-        w[a] = frand();
-        ph[a] = 0.5 * (frand() + 1.0);
-        L->ca[a] = 0.01f * frand();
-        L->cb[a] = 0.01f * frand();
-        for (int j = 0; j < 3; j++) L->m[a][j] = frand();
+        rc->w[a] = frand();
+        rc->ph[a] = 0.5 * (frand() + 1.0);
+        rc->L.ca[a] = 0.01f * frand();
+        rc->L.cb[a] = 0.01f * frand();
+        for (int j = 0; j < 3; j++) rc->L.m[a][j] = frand();
         for (int l = 0; l < 8; l++) {
-            L->cl[a][l] = (float)cos(2.0 * M_PI * w[a] * l);
-            L->sl[a][l] = (float)sin(2.0 * M_PI * w[a] * l);
+            rc->L.cl[a][l] = (float)cos(2.0 * M_PI * rc->w[a] * l);
+            rc->L.sl[a][l] = (float)sin(2.0 * M_PI * rc->w[a] * l);
         }
-        L->c8[a] = (float)cos(2.0 * M_PI * w[a] * 8);
-        L->s8[a] = (float)sin(2.0 * M_PI * w[a] * 8);
-        R->C[a] = (float)cos(2.0 * M_PI * ph[a]);
-        R->S[a] = (float)sin(2.0 * M_PI * ph[a]);
+        for (int c = 0; c < RIPPLE_BLOCKS; c++) {
+            const double t = 2.0 * M_PI * fmod(rc->w[a] * 8.0 * (b0 + c), 1.0);
+            rc->xr[c][a] = (float)cos(t);
+            rc->xr[c][3 + a] = (float)sin(t);
+        }
+        rc->R.C[a] = (float)cos(2.0 * M_PI * rc->ph[a]);
+        rc->R.S[a] = (float)sin(2.0 * M_PI * rc->ph[a]);
     }
-    R->L = L;
+    rc->R.xr = (const float(*)[6])rc->xr;
+    rc->R.m = m;
+    rc->R.L = &rc->L;
 }
 
 /* step 1 of post-gs: (density, gradient splats) per pixel; densities as
@@ -385,18 +403,17 @@ static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_
                 for (int var = 0; var < 3; var++)
                     for (int rip = 0; rip < 2; rip++) {
                         const vs_shade_tabs T = classify_tabs(F, var);
-                        vs_ripple_row row;
-                        vs_ripple_lanes lanes;
-                        double w[3], ph[3];
-                        ripple_random(&row, &lanes, w, ph);
+                        ripple_case rc;
+                        ripple_random(&rc);
+                        const vs_ripple_row *row = rip ? &rc.R : NULL;
                         for (int i = 0; i < NPIX; i++) {
                             q4[4 * i] = var == 1 ? low_density() : density();
                             for (int c = 1; c < 4; c++) q4[4 * i + c] = rep ? frand() : gcomp();
                             ar[i] = ao[i] = frand();
                         }
                         for (int i = 0; i < 3 * NPIX; i++) gr[i] = go[i] = g0[i] = frand();
-                        vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &T, rip ? &row : NULL);
-                        fn(ao + off, go + 3 * off, q4 + 4 * off, n, &T, rip ? &row : NULL);
+                        vs_classify_gs_scalar(ar + off, gr + 3 * off, q4 + 4 * off, n, &T, row);
+                        fn(ao + off, go + 3 * off, q4 + 4 * off, n, &T, row);
                         if (!classified_agree("classify_gs", isa, ar, ao, gr, go, g0, NPIX, off, n, rep, var)) return 0;
                         cases++;
                     }
@@ -406,33 +423,44 @@ static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_
 
 /* The reference's ripple against its definition in double: pixel i's
  * gradient less q v(i), v = Minv-like m of the terms ca cos + cb sin at
- * phase ph + w i (the lanes and the turn by 8 pixels in float) */
+ * phase ph + w (x + i) (the lanes and the blocks' turns in float); and a
+ * pixel's term must not depend on where its span starts: the same row
+ * classified from each of its first 9 pixels on gives the same bits */
 static void check_ripple_reference(const shade_fixture *F)
 {
     enum { N = 61 };
-    float q4[4 * N], a[N], g[3 * N];
+    float q4[4 * N], a[N], g[3 * N], g2[3 * N];
     double worst = 0.0;
+    int moved = 0;
     for (int rep = 0; rep < 50; rep++) {
         const vs_shade_tabs T = classify_tabs(F, 2);
-        vs_ripple_row row;
-        vs_ripple_lanes L;
-        double w[3], ph[3];
-        ripple_random(&row, &L, w, ph);
+        ripple_case rc;
+        ripple_random(&rc);
         for (int i = 0; i < 4 * N; i++) q4[i] = 4.0f * frand();
-        vs_classify_gs_scalar(a, g, q4, N, &T, &row);
+        vs_classify_gs_scalar(a, g, q4, N, &T, &rc.R);
         for (int i = 0; i < N; i++)
             for (int j = 0; j < 3; j++) {
                 double v = 0.0;
                 for (int x = 0; x < 3; x++) {
-                    const double t = 2.0 * M_PI * (ph[x] + w[x] * i);
-                    v += L.m[x][j] * (L.ca[x] * cos(t) + L.cb[x] * sin(t));
+                    const double t = 2.0 * M_PI * (rc.ph[x] + rc.w[x] * (rc.x + i));
+                    v += rc.L.m[x][j] * (rc.L.ca[x] * cos(t) + rc.L.cb[x] * sin(t));
                 }
                 const double want = (double)q4[4 * i + 1 + j] / T.slab - q4[4 * i] * v;
                 worst = fmax(worst, fabs(g[3 * i + j] - want));
             }
+        for (int s0 = 1; s0 <= 8; s0++) {
+            vs_ripple_row R = rc.R;
+            const int m = rc.R.m + s0;
+            R.xr = rc.R.xr + (m >> 3);
+            R.m = m & 7;
+            vs_classify_gs_scalar(a, g2, q4 + 4 * s0, N - s0, &T, &R);
+            if (memcmp(g2, g + 3 * s0, sizeof(float) * 3 * (N - s0))) moved++;
+        }
     }
-    printf("classify_gs   scalar  lattice ripple within %.2g of its definition over %d pixels\n", worst, N);
+    printf("classify_gs   scalar  lattice ripple within %.2g of its definition over %d pixels, "
+           "the same bits from any span start\n", worst, N);
     CHECK(worst < 2e-5, "classify_gs's ripple off its definition by %g", worst);
+    CHECK(moved == 0, "classify_gs's ripple changed with the span's start in %d rows", moved);
 }
 
 /* step 2: gradients with zeros, tiny, huge, NaN and Inf components,
