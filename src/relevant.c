@@ -149,6 +149,29 @@ static void finish_planes(void *arg, int worker, int z)
         for (size_t i = 0; i < plane; i++) mask[i] = (mask[i] & VS_REL_INSIDE) != 0;
 }
 
+/* Counting and filling take a brick's row of 8 mask bytes, each 0 or 1
+ * (finish_planes and the dilations keep them so), as one word: byte l
+ * holds voxel l.  The last brick of a row may be short; its bytes past the
+ * volume read as 0. */
+static inline uint64_t brick_row(const uint8_t *m, int n)
+{
+    uint64_t x = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    if (n == VS_BRICK) {
+        memcpy(&x, m, sizeof x);
+        return x;
+    }
+#endif
+    for (int l = 0; l < n; l++) x |= (uint64_t)m[l] << (8 * l);
+    return x;
+}
+_Static_assert(VS_BRICK == 8, "brick_row packs a brick's row into one 64-bit word");
+
+/* bytes of 0 or 1: their sum, and bit l set where byte l is 1 (each
+ * multiply gathers the bytes into the top one) */
+static inline unsigned row_count(uint64_t x) { return (unsigned)((x * 0x0101010101010101ULL) >> 56); }
+static inline unsigned row_bits(uint64_t x) { return (unsigned)((x * 0x0102040810204080ULL) >> 56); }
+
 static void count_slab(void *arg, int worker, int bk)
 {
     (void)worker;
@@ -160,11 +183,12 @@ static void count_slab(void *arg, int worker, int bk)
         for (int j = 0; j < d[1]; j++) {
             const uint8_t *m = J->mask + ((size_t)k * d[1] + j) * d[0];
             uint32_t *pb = J->pos + ((size_t)bk * nb[1] + j / VS_BRICK) * nb[0];
-            for (int i = 0; i < d[0]; i++)
-                if (m[i]) {
-                    pb[i / VS_BRICK]++;
-                    count++;
-                }
+            for (int bi = 0; bi < nb[0]; bi++) {
+                const int i0 = bi * VS_BRICK, n = d[0] - i0 < VS_BRICK ? d[0] - i0 : VS_BRICK;
+                const unsigned c = row_count(brick_row(m + i0, n));
+                pb[bi] += c;
+                count += c;
+            }
         }
     J->slab_count[bk] = count;
 }
@@ -185,10 +209,10 @@ static void fill_slab(void *arg, int worker, int bk)
             const int jk = (j & (VS_BRICK - 1)) << VS_BRICK_BITS | (k & (VS_BRICK - 1)) << (2 * VS_BRICK_BITS);
             for (int bi = 0; bi < nb[0]; bi++) {
                 if (pb[bi] == WHOLE_BRICK) continue; /* the shared block */
-                const int i1 = (bi + 1) * VS_BRICK < d[0] ? (bi + 1) * VS_BRICK : d[0];
+                const int i0 = bi * VS_BRICK, n = d[0] - i0 < VS_BRICK ? d[0] - i0 : VS_BRICK;
                 uint32_t at = pb[bi];
-                for (int i = bi * VS_BRICK; i < i1; i++)
-                    if (m[i]) J->vox[at++] = (vs_voxel)(jk | (i & (VS_BRICK - 1)));
+                for (unsigned bits = row_bits(brick_row(m + i0, n)); bits; bits &= bits - 1)
+                    J->vox[at++] = (vs_voxel)(jk | __builtin_ctz(bits));
                 pb[bi] = at;
             }
         }
