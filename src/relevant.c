@@ -23,53 +23,54 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
     free(rc);
 }
 
-/* OR-dilate a byte mask of flag bits by r voxels in a box (separable: one
- * pass per axis).  Each pass ORs whole contiguous runs — rows for x, rows of
- * neighbouring rows for y, planes of neighbouring planes for z — so the
- * compiler vectorises it and memory is read in order.  `tmp` (as large as
- * the mask) holds the copies the passes read. */
+/* OR-dilate a byte mask of flag bits by r voxels in a box, separably and
+ * in three passes over memory: each plane along x into a worker's plane
+ * and along y from there into `tmp` (one task a plane), then each plane
+ * of the mask as the OR of tmp's planes z - r .. z + r.  Each pass ORs
+ * shifted copies of whole planes, which the compiler vectorises; the x
+ * pass treats a plane as one long row and then redoes the r voxels at
+ * each end of its rows, which a long row would have mixed with the
+ * neighbouring row's. */
 static void or_into(uint8_t *dst, const uint8_t *src, size_t n)
 {
     for (size_t i = 0; i < n; i++) dst[i] |= src[i];
 }
 
-/* The passes run on the pool, one task per plane: the x and y passes only
- * touch their own plane (tmp holds a copy of each plane at its own place),
- * the z pass reads a copy of the whole mask. */
 typedef struct dilate_job {
     uint8_t *m, *tmp;
+    uint8_t *work; /* a plane per worker */
     const int *d;
     int r;
 } dilate_job;
 
 static void dilate_xy(void *arg, int worker, int z)
 {
-    (void)worker;
     const dilate_job *J = arg;
-    const int *d = J->d;
+    const int *d = J->d, r = J->r;
     const size_t row = (size_t)d[0], plane = row * d[1];
-    uint8_t *p = J->m + (size_t)z * plane, *t = J->tmp + (size_t)z * plane;
-    /* x: within each row, shifted copies */
-    memcpy(t, p, plane);
-    for (size_t o = 0; o < plane; o += row)
-        for (int sft = 1; sft <= J->r && (size_t)sft < row; sft++) {
-            or_into(p + o + sft, t + o, row - sft);
-            or_into(p + o, t + o + sft, row - sft);
-        }
-    /* y: within the plane, neighbouring rows */
-    memcpy(t, p, plane);
-    for (int sft = 1; sft <= J->r && sft < d[1]; sft++) {
-        or_into(p + sft * row, t, plane - sft * row);
-        or_into(p, t + sft * row, plane - sft * row);
+    const uint8_t *p = J->m + (size_t)z * plane;
+    uint8_t *w = J->work + (size_t)worker * plane, *t = J->tmp + (size_t)z * plane;
+    /* x */
+    memcpy(w, p, plane);
+    for (size_t sft = 1; sft <= (size_t)r && sft < plane; sft++) {
+        or_into(w + sft, p, plane - sft);
+        or_into(w, p + sft, plane - sft);
     }
-}
-
-static void copy_plane(void *arg, int worker, int z)
-{
-    (void)worker;
-    const dilate_job *J = arg;
-    const size_t plane = (size_t)J->d[0] * J->d[1];
-    memcpy(J->tmp + (size_t)z * plane, J->m + (size_t)z * plane, plane);
+    const int e = r < d[0] ? r : d[0];
+    for (size_t o = 0; o < plane; o += row)
+        for (int q = 0; q < 2 * e; q++) {
+            const int i = q < e ? q : d[0] - 2 * e + q; /* the first and last e of the row */
+            if (q >= e && i < e) continue;              /* a row shorter than 2 e: done above */
+            uint8_t v = 0;
+            for (int x = i - r < 0 ? 0 : i - r; x <= i + r && x < d[0]; x++) v |= p[o + (size_t)x];
+            w[o + (size_t)i] = v;
+        }
+    /* y */
+    memcpy(t, w, plane);
+    for (size_t sft = 1; sft <= (size_t)r && sft < (size_t)d[1]; sft++) {
+        or_into(t + sft * row, w, plane - sft * row);
+        or_into(t, w + sft * row, plane - sft * row);
+    }
 }
 
 static void dilate_z(void *arg, int worker, int z)
@@ -78,18 +79,19 @@ static void dilate_z(void *arg, int worker, int z)
     const dilate_job *J = arg;
     const size_t plane = (size_t)J->d[0] * J->d[1];
     uint8_t *p = J->m + (size_t)z * plane;
+    memcpy(p, J->tmp + (size_t)z * plane, plane);
     for (int sft = 1; sft <= J->r; sft++) {
         if (z - sft >= 0) or_into(p, J->tmp + (size_t)(z - sft) * plane, plane);
         if (z + sft < J->d[2]) or_into(p, J->tmp + (size_t)(z + sft) * plane, plane);
     }
 }
 
-static void dilate(struct vs_pool *pool, uint8_t *m, const int d[3], int r, uint8_t *tmp)
+/* tmp: as large as the mask; work: a plane per pool thread */
+static void dilate(struct vs_pool *pool, uint8_t *m, const int d[3], int r, uint8_t *tmp, uint8_t *work)
 {
     if (r <= 0) return;
-    dilate_job J = {m, tmp, d, r};
+    dilate_job J = {m, tmp, work, d, r};
     vs_pool_run(pool, d[2], dilate_xy, &J);
-    vs_pool_run(pool, d[2], copy_plane, &J);
     vs_pool_run(pool, d[2], dilate_z, &J);
 }
 
@@ -227,9 +229,11 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
     void *none = NULL;
-    uint8_t *mask = vs_relevant_take(old ? (void **)&old->scratch : &none, 2 * n); /* mask + dilation scratch */
+    /* the mask, and the dilations' copy and worker planes */
+    const size_t plane = (size_t)d[0] * d[1], nw = (size_t)(pool ? vs_pool_threads(pool) : 1);
+    uint8_t *mask = vs_relevant_take(old ? (void **)&old->scratch : &none, 2 * n + nw * plane);
     if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
-    uint8_t *line = mask + n;
+    uint8_t *line = mask + n, *work = line + n;
     build_job J = {vol, d, lut, c, mask, {0, 0, 0}, NULL, NULL, NULL, 0};
     if (all_visible) {
         /* Empty space is visible (opacity at what the volume reads
@@ -243,10 +247,10 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
          * range or values on both sides of it (a thin ramp can fall between
          * grid points).  Those voxels, dilated by the seam, are what the
          * kernel needs to reconstruct every point where opacity is > 0. */
-        dilate(pool, mask, d, 1, line);
+        dilate(pool, mask, d, 1, line, work);
         J.combine = 1;
         vs_pool_run(pool, d[2], finish_planes, &J);
-        dilate(pool, mask, d, seam, line);
+        dilate(pool, mask, d, seam, line, work);
     } else {
         vs_pool_run(pool, d[2], classify_planes, &J);
         vs_pool_run(pool, d[2], finish_planes, &J);

@@ -251,6 +251,17 @@ int main(void)
         if (v) classifications(pool, v, vols[k].scale, vols[k].offset, vols[k].name);
         vs_volume_release(v);
     }
+    /* rows shorter than twice the seam (the dilation's row ends) and
+     * single voxels across */
+    static const int narrow[][3] = {{3, 7, 5}, {1, 9, 4}, {2, 2, 2}, {5, 1, 6}, {17, 3, 1}};
+    for (int k = 0; k < 5; k++) {
+        vs_volume *v = make_volume(VS_U8, narrow[k], 1.0, 0.0);
+        CHECK(v != NULL, "volume");
+        char name[64];
+        snprintf(name, sizeof name, "u8 %dx%dx%d", narrow[k][0], narrow[k][1], narrow[k][2]);
+        if (v) classifications(pool, v, 1.0, 0.0, name);
+        vs_volume_release(v);
+    }
     printf("%d classifications: brick by brick equals the whole grid (%d built sparsely)\n", cases, sparse_cases);
     CHECK(sparse_cases > cases / 2, "only %d of %d built brick by brick", sparse_cases, cases);
     printf("%d bricks with every voxel relevant share one block\n", shared_bricks);
