@@ -136,7 +136,7 @@ static inline void ripple8(const vs_ripple_row *R, int c, __m256 v[3])
 /* The ripple of a span's 8 pixels from i (i a multiple of 8): lanes m..7
  * of block i / 8 then 0..m-1 of the next.  The next block's, made for a
  * span not aligned to the blocks, is kept in nx for the pixels from i + 8
- * (*have: the block it holds, -1 none). */
+ * (have: the block it holds, -1 none). */
 typedef struct ripple_span {
     __m256i idx;  /* lane l takes lane (l + m) & 7 */
     __m256 from_next; /* lanes l >= 8 - m: from the next block */

@@ -1,5 +1,5 @@
 /* Building the relevant-voxel list: on the whole grid, an in-range mask
- * dilated by the seam width with separable running maxima, then compacted
+ * dilated by the seam width with separable shifted ORs, then compacted
  * in k, j, i order; for large volumes brick by brick when few bricks are
  * reached (relevant_bricks.c); the cache around both. */
 #include "timing.h"
@@ -24,13 +24,14 @@ void vs_relevant_cache_free(vs_relevant_cache *rc)
 }
 
 /* OR-dilate a byte mask of flag bits by r voxels in a box, separably and
- * in three passes over memory: each plane along x into a worker's plane
- * and along y from there into `tmp` (one task a plane), then each plane
- * of the mask as the OR of tmp's planes z - r .. z + r.  Each pass ORs
- * shifted copies of whole planes, which the compiler vectorises; the x
- * pass treats a plane as one long row and then redoes the r voxels at
- * each end of its rows, which a long row would have mixed with the
- * neighbouring row's. */
+ * in three passes over memory between the mask and a second buffer as
+ * large: each plane along x into the other buffer's plane and along y
+ * back into its own (one task a plane), then each plane of the other
+ * buffer as the OR of the mask's planes z - r .. z + r, which is where
+ * the result ends.  Each pass ORs shifted copies of whole planes, which
+ * the compiler vectorises; the x pass treats a plane as one long row and
+ * then redoes the r voxels at each end of its rows, which a long row
+ * would have mixed with the neighbouring row's. */
 static void or_into(uint8_t *dst, const uint8_t *src, size_t n)
 {
     for (size_t i = 0; i < n; i++) dst[i] |= src[i];
@@ -38,19 +39,18 @@ static void or_into(uint8_t *dst, const uint8_t *src, size_t n)
 
 typedef struct dilate_job {
     uint8_t *m, *tmp;
-    uint8_t *work; /* a plane per worker */
     const int *d;
     int r;
 } dilate_job;
 
 static void dilate_xy(void *arg, int worker, int z)
 {
+    (void)worker;
     const dilate_job *J = arg;
     const int *d = J->d, r = J->r;
     const size_t row = (size_t)d[0], plane = row * d[1];
-    const uint8_t *p = J->m + (size_t)z * plane;
-    uint8_t *w = J->work + (size_t)worker * plane, *t = J->tmp + (size_t)z * plane;
-    /* x */
+    uint8_t *p = J->m + (size_t)z * plane, *w = J->tmp + (size_t)z * plane;
+    /* x: p into w */
     memcpy(w, p, plane);
     for (size_t sft = 1; sft <= (size_t)r && sft < plane; sft++) {
         or_into(w + sft, p, plane - sft);
@@ -65,11 +65,11 @@ static void dilate_xy(void *arg, int worker, int z)
             for (int x = i - r < 0 ? 0 : i - r; x <= i + r && x < d[0]; x++) v |= p[o + (size_t)x];
             w[o + (size_t)i] = v;
         }
-    /* y */
-    memcpy(t, w, plane);
+    /* y: w back into p */
+    memcpy(p, w, plane);
     for (size_t sft = 1; sft <= (size_t)r && sft < (size_t)d[1]; sft++) {
-        or_into(t + sft * row, w, plane - sft * row);
-        or_into(t, w + sft * row, plane - sft * row);
+        or_into(p + sft * row, w, plane - sft * row);
+        or_into(p, w + sft * row, plane - sft * row);
     }
 }
 
@@ -78,21 +78,24 @@ static void dilate_z(void *arg, int worker, int z)
     (void)worker;
     const dilate_job *J = arg;
     const size_t plane = (size_t)J->d[0] * J->d[1];
-    uint8_t *p = J->m + (size_t)z * plane;
-    memcpy(p, J->tmp + (size_t)z * plane, plane);
+    uint8_t *t = J->tmp + (size_t)z * plane;
+    memcpy(t, J->m + (size_t)z * plane, plane);
     for (int sft = 1; sft <= J->r; sft++) {
-        if (z - sft >= 0) or_into(p, J->tmp + (size_t)(z - sft) * plane, plane);
-        if (z + sft < J->d[2]) or_into(p, J->tmp + (size_t)(z + sft) * plane, plane);
+        if (z - sft >= 0) or_into(t, J->m + (size_t)(z - sft) * plane, plane);
+        if (z + sft < J->d[2]) or_into(t, J->m + (size_t)(z + sft) * plane, plane);
     }
 }
 
-/* tmp: as large as the mask; work: a plane per pool thread */
-static void dilate(struct vs_pool *pool, uint8_t *m, const int d[3], int r, uint8_t *tmp, uint8_t *work)
+/* *m dilated; the result ends in the other buffer, so the two swap */
+static void dilate(struct vs_pool *pool, uint8_t **m, uint8_t **tmp, const int d[3], int r)
 {
     if (r <= 0) return;
-    dilate_job J = {m, tmp, work, d, r};
+    dilate_job J = {*m, *tmp, d, r};
     vs_pool_run(pool, d[2], dilate_xy, &J);
     vs_pool_run(pool, d[2], dilate_z, &J);
+    uint8_t *t = *m;
+    *m = *tmp;
+    *tmp = t;
 }
 
 /* The per-voxel passes of a rebuild, on the pool: classification and the
@@ -229,11 +232,10 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     const int *d = vol->dims;
     size_t n = (size_t)d[0] * d[1] * d[2];
     void *none = NULL;
-    /* the mask, and the dilations' copy and worker planes */
-    const size_t plane = (size_t)d[0] * d[1], nw = (size_t)(pool ? vs_pool_threads(pool) : 1);
-    uint8_t *mask = vs_relevant_take(old ? (void **)&old->scratch : &none, 2 * n + nw * plane);
-    if (!mask) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
-    uint8_t *line = mask + n, *work = line + n;
+    /* the mask and the dilations' second buffer (they take turns) */
+    uint8_t *const scratch = vs_relevant_take(old ? (void **)&old->scratch : &none, 2 * n);
+    if (!scratch) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
+    uint8_t *mask = scratch, *line = scratch + n;
     build_job J = {vol, d, lut, c, mask, {0, 0, 0}, NULL, NULL, NULL, 0};
     if (all_visible) {
         /* Empty space is visible (opacity at what the volume reads
@@ -247,10 +249,12 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
          * range or values on both sides of it (a thin ramp can fall between
          * grid points).  Those voxels, dilated by the seam, are what the
          * kernel needs to reconstruct every point where opacity is > 0. */
-        dilate(pool, mask, d, 1, line, work);
+        dilate(pool, &mask, &line, d, 1);
+        J.mask = mask;
         J.combine = 1;
         vs_pool_run(pool, d[2], finish_planes, &J);
-        dilate(pool, mask, d, seam, line, work);
+        dilate(pool, &mask, &line, d, seam);
+        J.mask = mask;
     } else {
         vs_pool_run(pool, d[2], classify_planes, &J);
         vs_pool_run(pool, d[2], finish_planes, &J);
@@ -262,7 +266,7 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     uint32_t *pos = calloc(nbt + 1, sizeof *pos);
     size_t *slab_count = calloc((size_t)nb[2], sizeof *slab_count);
     if (!pos || !slab_count) {
-        free(mask);
+        free(scratch);
         free(pos);
         free(slab_count);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "relevant voxels: out of memory");
@@ -287,7 +291,7 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     vs_brick *bricks;
     const vs_status st = vs_relevant_lists(ctx, old, stored, nonempty, &vox, &bricks);
     if (st != VS_OK) {
-        free(mask);
+        free(scratch);
         free(pos);
         return st;
     }
@@ -319,9 +323,9 @@ static vs_status build_dense(vs_context *ctx, struct vs_pool *pool, const struct
     /* kept for the next rebuild (an iso change then pays no page faults),
      * unless large: a 2 G-voxel volume would hold 4 GB of it for good */
     if (2 * n <= VS_RELEVANT_KEEP_SCRATCH) {
-        rc->scratch = mask;
+        rc->scratch = scratch;
     } else {
-        free(mask);
+        free(scratch);
         rc->scratch = NULL;
     }
     rc->count = count;

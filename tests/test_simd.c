@@ -353,7 +353,9 @@ static void check_cd_reference(const shade_fixture *F)
  * cycles a pixel and phase ph[a] per axis at x = 0, random terms; the
  * span starts at pixel x = 8 b0 + m of the row (random block b0 and lane
  * m), so pixel i of the span lies at phase ph + w (x + i) */
-enum { RIPPLE_BLOCKS = (MAXN + 8) / 8 + 2 };
+enum { RIPPLE_N = 61 }; /* check_ripple_reference's row (check_classify_gs's are at most MAXN) */
+/* blocks a span of n pixels from lane m < 8 reads: up to (7 + n - 1) / 8 + 1 */
+enum { RIPPLE_BLOCKS = (7 + ((int)RIPPLE_N > (int)MAXN ? (int)RIPPLE_N : (int)MAXN) - 1) / 8 + 2 };
 typedef struct ripple_case {
     vs_ripple_row R;
     vs_ripple_lanes L;
@@ -428,7 +430,7 @@ static int check_classify_gs(const char *isa, vs_classify_gs_fn fn, const shade_
  * classified from each of its first 9 pixels on gives the same bits */
 static void check_ripple_reference(const shade_fixture *F)
 {
-    enum { N = 61 };
+    enum { N = RIPPLE_N };
     float q4[4 * N], a[N], g[3 * N], g2[3 * N];
     double worst = 0.0;
     int moved = 0;
