@@ -85,14 +85,19 @@ void vs_gs_ripple_tile_init(vs_gs_ripple_tile *T, float *tables, int x0, int y0,
     T->yr = T->xr + T->nb;
 }
 
-/* The tables for sheet k.  With perspective a sheet's pixels are 1 / sk
- * apart at depth 0: pixel (x, y) lies at (cx (1 - isk) + isk x, cy (1 -
- * isk) + isk y) there. */
+/* With perspective sheet k's pixels are 1 / sk apart at depth 0: pixel
+ * (x, y) lies at (cx (1 - isk) + isk x, cy (1 - isk) + isk y) there. */
+static double sheet_isk(const vs_frame *F, int k)
+{
+    return F->cam.persp ? 1.0 / vs_camera_sheet_scale(&F->cam, k, F->fp.slab) : 1.0;
+}
+
+/* The tables for sheet k. */
 static void tile_tables(const vs_frame *F, int k, vs_gs_ripple_tile *T)
 {
     const vs_gs_ripple *r = &F->ripple;
     const vs_camera *cam = &F->cam;
-    const double isk = cam->persp ? 1.0 / vs_camera_sheet_scale(cam, k, F->fp.slab) : 1.0;
+    const double isk = sheet_isk(F, k);
     T->k = k;
     T->kc = INT_MIN;
     if (cam->persp) {
@@ -112,7 +117,7 @@ const vs_ripple_row *vs_gs_ripple_at(const vs_frame *F, int k, int x, int y, vs_
     if (T->k == INT_MIN || (cam->persp && T->k != k)) tile_tables(F, k, T);
     if (T->kc != k) {
         /* the phase of pixel (0, 0) at sheet k */
-        const double isk = cam->persp ? 1.0 / vs_camera_sheet_scale(cam, k, F->fp.slab) : 1.0;
+        const double isk = sheet_isk(F, k);
         const double ox = cam->persp ? cam->cx * (1.0 - isk) : 0.0, oy = cam->persp ? cam->cy * (1.0 - isk) : 0.0;
         for (int a = 0; a < 3; a++)
             sincos_2pi(r, r->u0[a] + r->ux[a] * ox + r->uy[a] * oy + r->uz[a] * (k * F->fp.slab), &T->C0[a], &T->S0[a]);

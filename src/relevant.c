@@ -154,12 +154,14 @@ static void finish_planes(void *arg, int worker, int z)
         for (size_t i = 0; i < plane; i++) mask[i] = (mask[i] & VS_REL_INSIDE) != 0;
 }
 
-/* Counting and filling take a brick's row of 8 mask bytes, each 0 or 1
- * (finish_planes and the dilations keep them so), as one word: byte l
- * holds voxel l.  The last brick of a row may be short; its bytes past the
- * volume read as 0. */
-static inline uint64_t brick_row(const uint8_t *m, int n)
+/* Counting and filling take brick bi's part of a mask row of d0 bytes,
+ * each 0 or 1 (finish_planes and the dilations keep them so), as one
+ * word: byte l holds voxel 8 bi + l.  The last brick of a row may be
+ * short; its bytes past the volume read as 0. */
+static inline uint64_t brick_row(const uint8_t *row, int d0, int bi)
 {
+    const uint8_t *m = row + bi * VS_BRICK;
+    const int n = d0 - bi * VS_BRICK < VS_BRICK ? d0 - bi * VS_BRICK : VS_BRICK;
     uint64_t x = 0;
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
     if (n == VS_BRICK) {
@@ -189,8 +191,7 @@ static void count_slab(void *arg, int worker, int bk)
             const uint8_t *m = J->mask + ((size_t)k * d[1] + j) * d[0];
             uint32_t *pb = J->pos + ((size_t)bk * nb[1] + j / VS_BRICK) * nb[0];
             for (int bi = 0; bi < nb[0]; bi++) {
-                const int i0 = bi * VS_BRICK, n = d[0] - i0 < VS_BRICK ? d[0] - i0 : VS_BRICK;
-                const unsigned c = row_count(brick_row(m + i0, n));
+                const unsigned c = row_count(brick_row(m, d[0], bi));
                 pb[bi] += c;
                 count += c;
             }
@@ -214,9 +215,8 @@ static void fill_slab(void *arg, int worker, int bk)
             const int jk = (j & (VS_BRICK - 1)) << VS_BRICK_BITS | (k & (VS_BRICK - 1)) << (2 * VS_BRICK_BITS);
             for (int bi = 0; bi < nb[0]; bi++) {
                 if (pb[bi] == WHOLE_BRICK) continue; /* the shared block */
-                const int i0 = bi * VS_BRICK, n = d[0] - i0 < VS_BRICK ? d[0] - i0 : VS_BRICK;
                 uint32_t at = pb[bi];
-                for (unsigned bits = row_bits(brick_row(m + i0, n)); bits; bits &= bits - 1)
+                for (unsigned bits = row_bits(brick_row(m, d[0], bi)); bits; bits &= bits - 1)
                     J->vox[at++] = (vs_voxel)(jk | __builtin_ctz(bits));
                 pb[bi] = at;
             }

@@ -9,7 +9,6 @@
 #include "occlusion.h"
 #include "preintegrate.h"
 
-
 /* With a transfer function that makes value 0 visible, sheet pixels whose
  * slab centre lies outside the volume (where nothing was splatted, so q = 0)
  * must stay transparent, as they are for the ray caster; with a crop box,
