@@ -50,9 +50,9 @@ typedef struct shade_bench {
     float xyz[3 * VS_PROJECT_MAX];
     vs_project_in P;
     /* place_voxels: a 64 x 64 tile whose left half is opaque, voxels
-     * across it (a third culled), five slabs of a 257-entry depth table */
+     * across it (a third culled), five slabs from a 257-row slab table */
     int sat[65 * 65];
-    float pend[VS_PLACE_BATCH * 9], depth[258];
+    float pend[VS_PLACE_BATCH * 9], depth[257 * 8];
     vs_place_in PL;
     vs_placed placed;
     /* preint_alpha: a random 256 x 256 table over the sheets' values */
@@ -97,7 +97,7 @@ static void shade_bench_init(shade_bench *B)
                            .px = 5.5f, .py = 5.5f, .bx0 = 90.0f, .bx1 = 113.0f, .by0 = 80.0f, .by1 = 100.0f};
     for (int y = 0; y <= 64; y++)
         for (int x = 0; x <= 64; x++) B->sat[y * 65 + x] = y * (x < 32 ? x : 32);
-    for (int i = 0; i < 258; i++) B->depth[i] = (float)i / 256.0f;
+    for (int i = 0; i < 257 * 8; i++) B->depth[i] = (float)(i % 8 < 5) * (float)(i / 8) / 256.0f;
     for (int i = 0; i < VS_PLACE_BATCH; i++) {
         B->pend[9 * i] = 100.0f + 4.1f * (float)i;
         B->pend[9 * i + 1] = 120.0f + 2.3f * (float)(i % 7);
@@ -105,7 +105,7 @@ static void shade_bench_init(shade_bench *B)
     }
     B->PL = (vs_place_in){.sat = B->sat, .tx0 = 96, .ty0 = 96, .tw = 64, .th = 64, .pad_x = 5.5f, .pad_y = 5.5f,
                           .rx0 = 4.8f, .ry0 = 4.8f, .phases = 256.0f, .ox = 95, .oy = 95, .slab = 1.0f, .rz = 2.0f,
-                          .depth_scale = 64.0f, .depth = B->depth, .depth_n = 257, .opening = 10, .nd = 5};
+                          .sd = B->depth, .sscale = 256.0f, .sn = 256, .sw = 8, .opening = 10, .nd = 5};
     B->T = (vs_shade_tabs){.vmin = 0.0, .scale = 4095.0 / 100.0, .alpha = B->atab, .color = B->color,
                            .slab = 0.5f, .two_slab = 1.0f, .ppm = 1.0f, .zpm = 1.0f, .nl = SHADE_NL,
                            .lambda_bin = B->lambda_bin, .radius = B->radius, .phi_bin = B->phi_bin,

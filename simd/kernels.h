@@ -115,8 +115,8 @@ typedef struct vs_project_in {
 /* Voxels one place_voxels call takes at most. */
 #define VS_PLACE_BATCH 16
 /* What place_voxels needs: the tile's occlusion map, the footprint block's
- * geometry and the depth integral's table (src/activate.c, src/block.h,
- * src/footprint.h). */
+ * geometry and the slab tables of the depth integrals (src/activate.c,
+ * src/block.h, src/footprint.h). */
 typedef struct vs_place_in {
     const int *sat;         /* summed-area table of the tile's opaque pixels,
                                tw + 1 ints a row; NULL: no occlusion test    */
@@ -126,15 +126,16 @@ typedef struct vs_place_in {
     float phases;           /* VS_BLOCK_PHASES                               */
     int ox, oy;             /* image coordinates of buffer pixel (0, 0)      */
     float slab, rz;         /* slab thickness, kernel depth radius           */
-    float depth_scale;      /* table entries per unit of depth               */
-    const float *depth;     /* G(z), depth_n entries (vs_fp_depth)           */
-    int depth_n;
-    /* with_e: also the integrals of the depth derivative (post-gs), from
-     * exp(-kappa b^2) at the slab boundaries b (vs_fp_exp) */
+    /* The depth integrals over the slabs opening .. opening + nd - 1 of a
+     * voxel at depth z depend only on phi = z - (opening slab + rz), where
+     * its kernel starts inside the first slab: rows of sw floats at
+     * phi = r / sscale, r = 0..sn, interpolated linearly (vs_footprint
+     * slab_d, slab_e); with_e: also the integrals of the depth derivative
+     * (post-gs) */
+    const float *sd, *se;
+    float sscale;
+    int sn, sw;
     int with_e;
-    float kappa, exp_scale;
-    const float *exp_table;
-    int exp_n;
     int opening, nd;        /* first sheet, and how many slabs from it       */
     /* the block's column and row factors (vs_block_factors): phase tables
      * of bx and ny entries a row (vs_block_geom colw, roww), or colw NULL
@@ -143,18 +144,29 @@ typedef struct vs_place_in {
     int bx, ny;
 } vs_place_in;
 /* Per voxel lane: its block's placement (vs_block_place_at, relative to
- * the buffer) and the depth integrals over slabs opening .. opening+nd-1. */
+ * the buffer) and the depth integrals over slabs opening .. opening+nd-1
+ * (sw floats a lane written, the ones past nd 0). */
 typedef struct vs_placed {
     int bx[VS_PLACE_BATCH], by[VS_PLACE_BATCH]; /* block pixel (0,0) in the buffer */
     int qx[VS_PLACE_BATCH], qy[VS_PLACE_BATCH]; /* phase-table rows                */
     float fx[VS_PLACE_BATCH], fy[VS_PLACE_BATCH];
-    float D[VS_MAX_SHEETS_VOXEL][VS_PLACE_BATCH];
-    float E[VS_MAX_SHEETS_VOXEL][VS_PLACE_BATCH]; /* with_e only */
+    float D[VS_PLACE_BATCH][VS_MAX_SHEETS_VOXEL];
+    float E[VS_PLACE_BATCH][VS_MAX_SHEETS_VOXEL]; /* with_e only */
     /* with colw: the whole block's factors, columns (then 8 zeros, which
      * splat_voxel4 may read) and rows, as vs_block_factors computes them */
     float cw[VS_PLACE_BATCH][VS_VOXEL1_MAX + 8];
     float rw[VS_PLACE_BATCH][VS_VOXEL1_MAX];
 } vs_placed;
+
+/* A voxel's slab-table coordinate (vs_place_in): sscale (z - (opening slab
+ * + rz)) within [0, sn], the row below it and the fraction past that row;
+ * every ISA computes these floats with the same operations. */
+static inline float vs_place_slab_x(const vs_place_in *P, float z)
+{
+    float x = (z - ((float)P->opening * P->slab + P->rz)) * P->sscale;
+    x = x > 0.0f ? x : 0.0f;
+    return x < (float)P->sn ? x : (float)P->sn;
+}
 
 /* Post-gs: the kernel's lattice ripple along one row of a sheet
  * (src/gs_ripple.h).  The row is taken in blocks of 8 pixels anchored at

@@ -1,7 +1,7 @@
 /* Voxel activation (occlusion test, block placement, depth integrals),
  * AVX2: eight voxels a step, the scalar reference's operations in its
- * order (scalar.c), table and summed-area look-ups by masked gathers
- * (masked so that a culled or empty lane reads nothing). */
+ * order (scalar.c), summed-area look-ups by masked gathers (masked so
+ * that a culled or empty lane reads nothing). */
 #include "kernels.h"
 
 #include <immintrin.h>
@@ -16,50 +16,6 @@ static inline __m256i iceil8(__m256 v)
 {
     const __m256i i = _mm256_cvttps_epi32(v);
     return _mm256_sub_epi32(i, _mm256_castps_si256(_mm256_cmp_ps(v, _mm256_cvtepi32_ps(i), _CMP_GT_OQ)));
-}
-
-/* table[i] + f (table[i + 1] - table[i]) in the lanes of m, else 0, f the
- * fraction of x >= 0.  Entries i and i + 1 come as one 8-byte gather
- * element (half the elements of two float gathers), then split. */
-static inline __m256 lerp_table8(const float *table, __m256 m, __m256 x)
-{
-    const __m256i i = _mm256_cvttps_epi32(x);
-    const __m256 f = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
-    const __m256i mi = _mm256_castps_si256(m);
-    const __m256 lo = _mm256_castsi256_ps(_mm256_mask_i32gather_epi64(
-        _mm256_setzero_si256(), (const long long *)(const void *)table, _mm256_castsi256_si128(i),
-        _mm256_cvtepi32_epi64(_mm256_castsi256_si128(mi)), 4));
-    const __m256 hi = _mm256_castsi256_ps(_mm256_mask_i32gather_epi64(
-        _mm256_setzero_si256(), (const long long *)(const void *)table, _mm256_extracti128_si256(i, 1),
-        _mm256_cvtepi32_epi64(_mm256_extracti128_si256(mi, 1)), 4));
-    /* shuffle_ps gives lanes 0 1 4 5 2 3 6 7; the 64-bit permute orders them */
-    const __m256 t0 = _mm256_castpd_ps(_mm256_permute4x64_pd(
-        _mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0))), _MM_SHUFFLE(3, 1, 2, 0)));
-    const __m256 t1 = _mm256_castpd_ps(_mm256_permute4x64_pd(
-        _mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1))), _MM_SHUFFLE(3, 1, 2, 0)));
-    return _mm256_and_ps(m, _mm256_add_ps(t0, _mm256_mul_ps(f, _mm256_sub_ps(t1, t0))));
-}
-
-/* G(z) in the lanes of m (vs_fp_depth) */
-static inline __m256 depth8(const vs_place_in *P, __m256 m, __m256 z)
-{
-    const __m256 x = _mm256_mul_ps(_mm256_add_ps(z, _mm256_set1_ps(P->rz)), _mm256_set1_ps(P->depth_scale));
-    const __m256 pos = _mm256_and_ps(m, _mm256_cmp_ps(x, _mm256_setzero_ps(), _CMP_GT_OQ));
-    const __m256 top = _mm256_and_ps(pos, _mm256_cmp_ps(x, _mm256_set1_ps((float)(P->depth_n - 1)), _CMP_GE_OQ));
-    const __m256 g = lerp_table8(P->depth, _mm256_andnot_ps(top, pos), x);
-    return _mm256_blendv_ps(g, _mm256_set1_ps(P->depth[P->depth_n - 1]), top);
-}
-
-/* exp(-kappa b^2) for |b| < rz in the lanes of m, else 0 (the scalar
- * reference's exp_at) */
-static inline __m256 exp8(const vs_place_in *P, __m256 m, __m256 b)
-{
-    const __m256 ab = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), b);
-    const __m256 in = _mm256_and_ps(m, _mm256_cmp_ps(ab, _mm256_set1_ps(P->rz), _CMP_LT_OQ));
-    const __m256 x = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(P->kappa), b), b),
-                                   _mm256_set1_ps(P->exp_scale));
-    const __m256 ok = _mm256_and_ps(in, _mm256_cmp_ps(x, _mm256_set1_ps((float)(P->exp_n - 1)), _CMP_LT_OQ));
-    return lerp_table8(P->exp_table, ok, x);
 }
 
 /* a block's first pixel and phase along one axis (vs_block_place_at) */
@@ -85,7 +41,8 @@ static inline void lerp8(float *o, const float *t0, int n, float f)
 }
 
 /* lanes h .. h + 7 of the batch; returns their live bits */
-static unsigned place_half(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out, int h)
+static unsigned place_half(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out, int h, int *sr,
+                           float *sf)
 {
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     const __m256 all = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n - h), lane));
@@ -134,33 +91,34 @@ static unsigned place_half(const float *xyz, int stride, int n, const vs_place_i
     _mm256_storeu_si256((__m256i *)(out->qy + h), qy);
     _mm256_storeu_ps(out->fx + h, fx);
     _mm256_storeu_ps(out->fy + h, fy);
-    __m256 g0 = depth8(P, live, _mm256_sub_ps(_mm256_set1_ps((float)P->opening * P->slab), z));
-    for (int j = 0; j < P->nd; j++) {
-        const __m256 g1 = depth8(P, live, _mm256_sub_ps(_mm256_set1_ps((float)(P->opening + j + 1) * P->slab), z));
-        _mm256_storeu_ps(out->D[j] + h, _mm256_sub_ps(g1, g0));
-        g0 = g1;
-    }
-    if (P->with_e) {
-        __m256 e0 = exp8(P, live, _mm256_sub_ps(_mm256_set1_ps((float)P->opening * P->slab), z));
-        for (int j = 0; j < P->nd; j++) {
-            const __m256 e1 = exp8(P, live, _mm256_sub_ps(_mm256_set1_ps((float)(P->opening + j + 1) * P->slab), z));
-            _mm256_storeu_ps(out->E[j] + h, _mm256_sub_ps(e1, e0));
-            e0 = e1;
-        }
-    }
+    /* the slab tables' rows and fractions (vs_place_slab_x) */
+    const __m256 sxv = _mm256_min_ps(
+        _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(z, _mm256_set1_ps((float)P->opening * P->slab + P->rz)),
+                                    _mm256_set1_ps(P->sscale)),
+                      _mm256_setzero_ps()),
+        _mm256_set1_ps((float)P->sn));
+    const __m256i srv = _mm256_min_epi32(_mm256_cvttps_epi32(sxv), _mm256_set1_epi32(P->sn - 1));
+    _mm256_storeu_si256((__m256i *)(void *)(sr + h), srv);
+    _mm256_storeu_ps(sf + h, _mm256_sub_ps(sxv, _mm256_cvtepi32_ps(srv)));
     return bits << h;
 }
 
 unsigned vs_place_voxels_avx2(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out)
 {
-    unsigned live = place_half(xyz, stride, n, P, out, 0);
-    if (n > 8) live |= place_half(xyz, stride, n, P, out, 8);
-    if (P->colw)
-        for (unsigned m = live; m; m &= m - 1) {
-            const int i = __builtin_ctz(m);
-            lerp8(out->cw[i], P->colw + (size_t)out->qx[i] * P->bx, P->bx, out->fx[i]);
-            _mm256_storeu_ps(out->cw[i] + P->bx, _mm256_setzero_ps());
-            lerp8(out->rw[i], P->roww + (size_t)out->qy[i] * P->ny, P->ny, out->fy[i]);
-        }
+    int sr[16];
+    float sf[16];
+    unsigned live = place_half(xyz, stride, n, P, out, 0, sr, sf);
+    if (n > 8) live |= place_half(xyz, stride, n, P, out, 8, sr, sf);
+    /* a row pair of the slab tables a live voxel, and its factors */
+    for (unsigned m = live; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        const size_t row = (size_t)sr[i] * P->sw;
+        lerp8(out->D[i], P->sd + row, P->sw, sf[i]);
+        if (P->with_e) lerp8(out->E[i], P->se + row, P->sw, sf[i]);
+        if (!P->colw) continue;
+        lerp8(out->cw[i], P->colw + (size_t)out->qx[i] * P->bx, P->bx, out->fx[i]);
+        _mm256_storeu_ps(out->cw[i] + P->bx, _mm256_setzero_ps());
+        lerp8(out->rw[i], P->roww + (size_t)out->qy[i] * P->ny, P->ny, out->fy[i]);
+    }
     return live;
 }

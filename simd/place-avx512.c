@@ -1,7 +1,7 @@
 /* Voxel activation (occlusion test, block placement, depth integrals),
  * AVX-512: sixteen voxels a call, the scalar reference's operations in its
- * order (scalar.c), table and summed-area look-ups by masked gathers
- * (masked so that a culled or empty lane reads nothing). */
+ * order (scalar.c), summed-area look-ups by masked gathers (masked so
+ * that a culled or empty lane reads nothing). */
 #include "kernels.h"
 
 #include <immintrin.h>
@@ -19,45 +19,6 @@ static inline __m512i iceil16(__m512 v)
                                  _mm512_set1_epi32(1));
 }
 
-/* table[i] + f (table[i + 1] - table[i]) in the lanes of m, else 0, f the
- * fraction of x >= 0.  Entries i and i + 1 come as one 8-byte gather
- * element: half the elements of two float gathers (a gather costs by the
- * element on Zen 4). */
-static inline __m512 lerp_table16(const float *table, __mmask16 m, __m512 x)
-{
-    const __m512i i = _mm512_cvttps_epi32(x);
-    const __m512 f = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
-    const __m512i lo = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), (__mmask8)m, _mm512_castsi512_si256(i),
-                                                   table, 4);
-    const __m512i hi = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), (__mmask8)(m >> 8),
-                                                   _mm512_extracti64x4_epi64(i, 1), table, 4);
-    const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
-    const __m512 t0 = _mm512_castsi512_ps(_mm512_permutex2var_epi32(lo, even, hi));
-    const __m512 t1 = _mm512_castsi512_ps(_mm512_permutex2var_epi32(lo, _mm512_add_epi32(even, _mm512_set1_epi32(1)), hi));
-    return _mm512_maskz_add_ps(m, t0, _mm512_mul_ps(f, _mm512_sub_ps(t1, t0)));
-}
-
-/* G(z) in the lanes of m (vs_fp_depth) */
-static inline __m512 depth16(const vs_place_in *P, __mmask16 m, __m512 z)
-{
-    const __m512 x = _mm512_mul_ps(_mm512_add_ps(z, _mm512_set1_ps(P->rz)), _mm512_set1_ps(P->depth_scale));
-    const __mmask16 pos = _mm512_mask_cmp_ps_mask(m, x, _mm512_setzero_ps(), _CMP_GT_OQ);
-    const __mmask16 top = _mm512_mask_cmp_ps_mask(pos, x, _mm512_set1_ps((float)(P->depth_n - 1)), _CMP_GE_OQ);
-    const __m512 g = lerp_table16(P->depth, pos & ~top, x);
-    return _mm512_mask_mov_ps(g, top, _mm512_set1_ps(P->depth[P->depth_n - 1]));
-}
-
-/* exp(-kappa b^2) for |b| < rz in the lanes of m, else 0 (the scalar
- * reference's exp_at) */
-static inline __m512 exp16(const vs_place_in *P, __mmask16 m, __m512 b)
-{
-    const __mmask16 in = _mm512_mask_cmp_ps_mask(m, _mm512_abs_ps(b), _mm512_set1_ps(P->rz), _CMP_LT_OQ);
-    const __m512 x = _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(P->kappa), b), b),
-                                   _mm512_set1_ps(P->exp_scale));
-    const __mmask16 ok = _mm512_mask_cmp_ps_mask(in, x, _mm512_set1_ps((float)(P->exp_n - 1)), _CMP_LT_OQ);
-    return lerp_table16(P->exp_table, ok, x);
-}
-
 /* a block's first pixel and phase along one axis (vs_block_place_at) */
 static inline void place16(__m512 c, float r0, float phases, __m512i *p, __m512i *q, __m512 *f)
 {
@@ -68,16 +29,20 @@ static inline void place16(__m512 c, float r0, float phases, __m512i *p, __m512i
     *f = _mm512_sub_ps(s, _mm512_cvtepi32_ps(*q));
 }
 
-/* o[k] = t0[k] + f (t1[k] - t0[k]), k < n, t1 = t0 + n (block.c's lerp) */
-static inline void lerp16(float *o, const float *t0, int n, float f)
+/* o[k] = t0[k] + f (t1[k] - t0[k]), k < n, t1 = t0 + n (block.c's lerp);
+ * m: the mask of a row's last (or only) 16 floats, made once a call */
+static inline void lerp16(float *o, const float *t0, int n, float f, __mmask16 m)
 {
     const __m512 fv = _mm512_set1_ps(f);
-    for (int k = 0; k < n; k += 16) {
-        const __mmask16 m = n - k >= 16 ? (__mmask16)0xffff : (__mmask16)((1u << (n - k)) - 1u);
-        const __m512 a = _mm512_maskz_loadu_ps(m, t0 + k), b = _mm512_maskz_loadu_ps(m, t0 + n + k);
-        _mm512_mask_storeu_ps(o + k, m, _mm512_add_ps(a, _mm512_mul_ps(fv, _mm512_sub_ps(b, a))));
+    int k = 0;
+    for (; n - k > 16; k += 16) {
+        const __m512 a = _mm512_loadu_ps(t0 + k), b = _mm512_loadu_ps(t0 + n + k);
+        _mm512_storeu_ps(o + k, _mm512_add_ps(a, _mm512_mul_ps(fv, _mm512_sub_ps(b, a))));
     }
+    const __m512 a = _mm512_maskz_loadu_ps(m, t0 + k), b = _mm512_maskz_loadu_ps(m, t0 + n + k);
+    _mm512_mask_storeu_ps(o + k, m, _mm512_add_ps(a, _mm512_mul_ps(fv, _mm512_sub_ps(b, a))));
 }
+static inline __mmask16 tail16(int n) { return (__mmask16)(0xffffu >> (15 - (n - 1) % 16)); }
 
 unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out)
 {
@@ -121,26 +86,28 @@ unsigned vs_place_voxels_avx512(const float *xyz, int stride, int n, const vs_pl
     _mm512_storeu_si512(out->qy, qy);
     _mm512_storeu_ps(out->fx, fx);
     _mm512_storeu_ps(out->fy, fy);
-    __m512 g0 = depth16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)P->opening * P->slab), z));
-    for (int j = 0; j < P->nd; j++) {
-        const __m512 g1 = depth16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)(P->opening + j + 1) * P->slab), z));
-        _mm512_storeu_ps(out->D[j], _mm512_sub_ps(g1, g0));
-        g0 = g1;
+    /* the slab tables' rows and fractions (vs_place_slab_x), then a row
+     * pair a live voxel */
+    const __m512 sxv = _mm512_min_ps(
+        _mm512_max_ps(_mm512_mul_ps(_mm512_sub_ps(z, _mm512_set1_ps((float)P->opening * P->slab + P->rz)),
+                                    _mm512_set1_ps(P->sscale)),
+                      _mm512_setzero_ps()),
+        _mm512_set1_ps((float)P->sn));
+    const __m512i srv = _mm512_min_epi32(_mm512_cvttps_epi32(sxv), _mm512_set1_epi32(P->sn - 1));
+    int sr[16];
+    float sf[16];
+    _mm512_storeu_si512(sr, srv);
+    _mm512_storeu_ps(sf, _mm512_sub_ps(sxv, _mm512_cvtepi32_ps(srv)));
+    const __mmask16 md = tail16(P->sw), mc = P->colw ? tail16(P->bx) : 0, mr = P->colw ? tail16(P->ny) : 0;
+    for (unsigned m = live; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        const size_t row = (size_t)sr[i] * P->sw;
+        lerp16(out->D[i], P->sd + row, P->sw, sf[i], md);
+        if (P->with_e) lerp16(out->E[i], P->se + row, P->sw, sf[i], md);
+        if (!P->colw) continue;
+        lerp16(out->cw[i], P->colw + (size_t)out->qx[i] * P->bx, P->bx, out->fx[i], mc);
+        _mm256_storeu_ps(out->cw[i] + P->bx, _mm256_setzero_ps());
+        lerp16(out->rw[i], P->roww + (size_t)out->qy[i] * P->ny, P->ny, out->fy[i], mr);
     }
-    if (P->with_e) {
-        __m512 e0 = exp16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)P->opening * P->slab), z));
-        for (int j = 0; j < P->nd; j++) {
-            const __m512 e1 = exp16(P, live, _mm512_sub_ps(_mm512_set1_ps((float)(P->opening + j + 1) * P->slab), z));
-            _mm512_storeu_ps(out->E[j], _mm512_sub_ps(e1, e0));
-            e0 = e1;
-        }
-    }
-    if (P->colw)
-        for (unsigned m = live; m; m &= m - 1) {
-            const int i = __builtin_ctz(m);
-            lerp16(out->cw[i], P->colw + (size_t)out->qx[i] * P->bx, P->bx, out->fx[i]);
-            _mm256_storeu_ps(out->cw[i] + P->bx, _mm256_setzero_ps());
-            lerp16(out->rw[i], P->roww + (size_t)out->qy[i] * P->ny, P->ny, out->fy[i]);
-        }
     return live;
 }

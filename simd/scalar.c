@@ -299,16 +299,15 @@ void vs_splat_rows_mix_scalar(float *dst, ptrdiff_t ds, const float *cw, const f
 }
 
 /* G(z) as src/footprint.h's vs_fp_depth */
-static inline float depth_at(const vs_place_in *P, float z)
+/* A voxel's depth integrals: the slab table's rows around its coordinate
+ * x (vs_place_slab_x), interpolated, sw floats. */
+static inline void slab_row(const vs_place_in *P, const float *tab, float x, float *o)
 {
-    return vs_depth_lookup(P->depth, P->depth_n, P->depth_scale, P->rz, z);
-}
-
-/* exp(-kappa b^2) inside the kernel's depth radius, else 0 (as src/rasterize.h's
- * make_section) */
-static inline float exp_at(const vs_place_in *P, float b)
-{
-    return fabsf(b) < P->rz ? vs_exp_lookup(P->exp_table, P->exp_n, P->exp_scale, P->kappa * b * b) : 0.0f;
+    int r = (int)x;
+    if (r > P->sn - 1) r = P->sn - 1;
+    const float f = x - (float)r;
+    const float *t0 = tab + (size_t)r * P->sw, *t1 = t0 + P->sw;
+    for (int j = 0; j < P->sw; j++) o[j] = t0[j] + f * (t1[j] - t0[j]);
 }
 
 /* the tile pixels within pad of (x, y) all opaque, or none of them */
@@ -350,20 +349,9 @@ unsigned vs_place_voxels_scalar(const float *xyz, int stride, int n, const vs_pl
         place_axis(y, P->ry0, P->phases, &py, &out->qy[i], &out->fy[i]);
         out->bx[i] = px - P->ox;
         out->by[i] = py - P->oy;
-        float g0 = depth_at(P, (float)P->opening * P->slab - z);
-        for (int j = 0; j < P->nd; j++) {
-            const float g1 = depth_at(P, (float)(P->opening + j + 1) * P->slab - z);
-            out->D[j][i] = g1 - g0;
-            g0 = g1;
-        }
-        if (P->with_e) {
-            float e0 = exp_at(P, (float)P->opening * P->slab - z);
-            for (int j = 0; j < P->nd; j++) {
-                const float e1 = exp_at(P, (float)(P->opening + j + 1) * P->slab - z);
-                out->E[j][i] = e1 - e0;
-                e0 = e1;
-            }
-        }
+        const float sx = vs_place_slab_x(P, z);
+        slab_row(P, P->sd, sx, out->D[i]);
+        if (P->with_e) slab_row(P, P->se, sx, out->E[i]);
         if (!P->colw) continue;
         const float *c0 = P->colw + (size_t)out->qx[i] * P->bx, *c1 = c0 + P->bx;
         const float *r0 = P->roww + (size_t)out->qy[i] * P->ny, *r1 = r0 + P->ny;

@@ -220,8 +220,7 @@ typedef struct voxel_job {
     const tile_ctx *t;
     const vs_block_geom *g;
     const float *wv;          /* its splat weights before the depth integral  */
-    const float *D, *E;       /* depth integrals of its sheets: D[j * dstep]   */
-    int dstep;
+    const float *D, *E;       /* depth integrals of its sheets opening + j     */
     float ex, ey;             /* its centre (image pixels)                      */
     int opening, kl;          /* its first and last sheet                       */
     const int *slots;         /* ring slot of sheet opening + j                 */
@@ -235,7 +234,7 @@ typedef struct voxel_job {
 } voxel_job;
 
 /* Voxel at a time: the sheets opening..kl that a voxel's block reaches with
- * a positive depth integral D[j dstep] (j = k - opening): their
+ * a positive depth integral D[j] (j = k - opening): their
  * destinations (the block's offset in their ring slot) and weights wv[c] D
  * (nc channels); each sheet's touched box grown by the block's.  Returns how
  * many.  Inlined with nc constant.  (Post-gs writes the same loop with its
@@ -244,7 +243,7 @@ static inline int reached_sheets(const voxel_job *j, int nc, float **dst, float 
 {
     int ns = 0;
     for (int i = 0; i <= j->kl - j->opening; i++) {
-        const float Dk = j->D[i * j->dstep];
+        const float Dk = j->D[i];
         if (!(Dk > 0.0f)) continue;
         const int slot = j->slots[i];
         dst[ns] = j->ring[slot] + j->off;
@@ -309,11 +308,11 @@ static inline int splat_gradient(const voxel_job *j)
     int ns = 0;
     for (int k = j->opening; k <= j->kl; k++) { /* as reached_sheets, with the gradient weights */
         const int i = k - j->opening;
-        const float Dk = j->D[i * j->dstep];
+        const float Dk = j->D[i];
         if (!(Dk > 0.0f)) continue;
         const int slot = j->slots[i];
         dst[ns] = j->ring[slot] + j->off;
-        gradient_weights(wv, Dk, j->E[i * j->dstep], A, rk, &w[4 * ns]);
+        gradient_weights(wv, Dk, j->E[i], A, rk, &w[4 * ns]);
         ns++;
         rect_merge(&j->bbs[slot], &j->box);
     }
@@ -394,10 +393,10 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                            .pad_x = (float)F->pad_x, .pad_y = (float)F->pad_y,
                            .rx0 = g->rx0, .ry0 = g->ry0, .phases = (float)VS_BLOCK_PHASES,
                            .ox = t->ox, .oy = t->oy, .slab = slab, .rz = rz,
-                           .depth_scale = F->fp.depth_scale, .depth = F->fp.depth_table, .depth_n = F->fp.depth_n,
+                           .sd = F->fp.slab_d, .se = F->fp.slab_e, .sscale = F->fp.slab_scale,
+                           .sn = F->fp.slab_n, .sw = F->fp.slab_w,
                            /* E: post-gs voxels (sheared_blocks sections make their own) */
-                           .with_e = st->gradient_splats && !F->sheared_blocks, .kappa = (float)F->fp.kappa,
-                           .exp_scale = F->fp.exp_scale, .exp_table = F->fp.exp_table, .exp_n = F->fp.exp_n,
+                           .with_e = st->gradient_splats && !F->sheared_blocks,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
                            .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
@@ -453,8 +452,8 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
              * gradient layout and the block fallback set the phases too */
             vs_block_place pl_ = {.x = bx + t->ox, .y = by + t->oy, .qx = pv.qx[lane], .qy = pv.qy[lane],
                                   .fx = pv.fx[lane], .fy = pv.fy[lane]};
-            const voxel_job job = {.t = t, .g = g, .wv = wvs[lane], .D = &pv.D[0][lane], .E = &pv.E[0][lane],
-                                   .dstep = VS_PLACE_BATCH, .ex = e->x, .ey = e->y, .opening = opening, .kl = kl,
+            const voxel_job job = {.t = t, .g = g, .wv = wvs[lane], .D = pv.D[lane], .E = pv.E[lane],
+                                   .ex = e->x, .ey = e->y, .opening = opening, .kl = kl,
                                    .slots = slots, .ring = ring, .bbs = bbs,
                                    .box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1},
                                    .off = (ptrdiff_t)(by + j0) * ((ptrdiff_t)t->stride * ch) +
@@ -478,12 +477,12 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
             vs_block_build(g, &pl_, j0, j1, v0, v1, t->blk);
             const float *src = t->blk + (size_t)j0 * bs + 8 * v0;
             for (int k = opening; k <= kl; k++) {
-                const float D = pv.D[k - opening][lane];
+                const float D = pv.D[lane][k - opening];
                 if (!(D > 0.0f)) continue;
                 n_splatted++;
                 const int slot = slots[k - opening];
                 float w8[8];
-                weights8(job.wv, D, st->gradient_splats ? pv.E[k - opening][lane] : 0.0f, &F->fp, w8);
+                weights8(job.wv, D, st->gradient_splats ? pv.E[lane][k - opening] : 0.0f, &F->fp, w8);
                 F->kern.splat_block(ring[slot] + job.off, job.ds, src, bs, j1 - j0, v1 - v0, w8);
                 n_vec += (uint64_t)((j1 - j0) * (v1 - v0));
                 rect_merge(&bbs[slot], &job.box);

@@ -2,6 +2,7 @@
 #include "gaussian.h"
 #include "context.h"
 #include "footprint.h"
+#include "kernels.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -10,7 +11,9 @@ void vs_footprint_free(vs_footprint *fp)
 {
     free(fp->exp_table);
     free(fp->depth_table);
-    fp->exp_table = fp->depth_table = NULL;
+    free(fp->slab_d);
+    free(fp->slab_e);
+    fp->exp_table = fp->depth_table = fp->slab_d = fp->slab_e = NULL;
 }
 
 /* The gradient's x and y come from pixels 1/m voxels apart, its z from
@@ -135,7 +138,17 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
     if (fp->depth_n > (1 << 24)) fp->depth_n = 1 << 24;
     fp->depth_scale = (float)((fp->depth_n - 1) / (2.0 * fp->rz));
     fp->depth_table = malloc((size_t)(fp->depth_n + 1) * sizeof(float));
-    if (!fp->exp_table || !fp->depth_table) {
+    /* the slab tables: a row of integrals per 1/depth_resolution of phi
+     * (at most 2^14 rows), so that a voxel reads one row pair, not a
+     * depth-table pair per slab boundary */
+    const int nd = fp->vspan < VS_MAX_SHEETS_VOXEL ? fp->vspan : VS_MAX_SHEETS_VOXEL;
+    const double rows = ceil(fp->slab * s->depth_resolution);
+    fp->slab_n = rows < 1.0 ? 1 : rows > (1 << 14) ? 1 << 14 : (int)rows;
+    fp->slab_w = (nd + 7) & ~7;
+    fp->slab_scale = (float)(fp->slab_n / fp->slab);
+    fp->slab_d = malloc((size_t)(fp->slab_n + 1) * fp->slab_w * sizeof(float));
+    fp->slab_e = malloc((size_t)(fp->slab_n + 1) * fp->slab_w * sizeof(float));
+    if (!fp->exp_table || !fp->depth_table || !fp->slab_d || !fp->slab_e) {
         vs_footprint_free(fp);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "footprint tables: out of memory");
     }
@@ -147,6 +160,20 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
         double z = -fp->rz + i / (double)fp->depth_scale;
         if (z > fp->rz) z = fp->rz;
         fp->depth_table[i] = (float)(0.5 * sqrt(M_PI / fp->kappa) * (erf(sk * z) - base));
+    }
+    for (int r = 0; r <= fp->slab_n; r++) {
+        const double phi = r * fp->slab / fp->slab_n;
+        float *d = fp->slab_d + (size_t)r * fp->slab_w, *e = fp->slab_e + (size_t)r * fp->slab_w;
+        for (int j = 0; j < fp->slab_w; j++) {
+            /* the slab's ends, from the voxel's centre */
+            const double b0 = j * fp->slab - phi - fp->rz, b1 = b0 + fp->slab;
+            const double t0 = b0 < -fp->rz ? -fp->rz : b0 > fp->rz ? fp->rz : b0;
+            const double t1 = b1 < -fp->rz ? -fp->rz : b1 > fp->rz ? fp->rz : b1;
+            const double e0 = fabs(b0) < fp->rz ? exp(-fp->kappa * b0 * b0) : 0.0;
+            const double e1 = fabs(b1) < fp->rz ? exp(-fp->kappa * b1 * b1) : 0.0;
+            d[j] = j < nd ? (float)(0.5 * sqrt(M_PI / fp->kappa) * (erf(sk * t1) - erf(sk * t0))) : 0.0f;
+            e[j] = j < nd ? (float)(e1 - e0) : 0.0f;
+        }
     }
     return VS_OK;
 }

@@ -53,6 +53,15 @@ typedef struct vs_footprint {
     int depth_n;
     float depth_scale;   /* (depth_n - 1) / (2 rz)                             */
     float *depth_table;  /* depth_n + 1 entries                                */
+    /* A voxel's depth integrals over the slabs from its first sheet
+     * (place_voxels, simd/kernels.h vs_place_in): row r, for a kernel that
+     * starts phi = r / slab_scale into its first slab (r = 0..slab_n),
+     * holds slab_w floats, the integrals over slabs 0..vspan-1 (at most
+     * VS_MAX_SHEETS_VOXEL) and then zeros; slab_d of exp(-kappa t^2),
+     * slab_e of its derivative (exp at the slab's ends, 0 past rz) */
+    int slab_n, slab_w;
+    float slab_scale;
+    float *slab_d, *slab_e;
 } vs_footprint;
 
 vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_camera *cam,

@@ -962,17 +962,19 @@ static void voxel4_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, 
 /* place_voxels: random tiles and opacity maps (none, sparse, dense, all
  * opaque), voxel centres in and around the tile, some exactly on integer
  * pixel edges (ifloor/iceil ties) or with the footprint's reach ending on
- * one, depths below, inside and past the depth table, 0..16 voxels at
+ * one, depths before, inside and past the first slab, 0..16 voxels at
  * stride 9 (the pending-voxel record), with and without the occlusion
  * test.  The live mask and, for live lanes, every output must equal the
  * reference's bit for bit.  With `truth`, the reference itself is checked
  * against independent definitions: a brute-force count of opaque pixels,
- * vs_block_place_at and vs_fp_depth.  Returns the mismatching cases. */
-enum { PL_TW = 70, PL_STRIDE = 9 };
+ * vs_block_place_at and the slab tables' interpolation written out.
+ * Returns the mismatching cases.  (check_slab_tables checks the tables a
+ * footprint makes against the integrals in double.) */
+enum { PL_TW = 70, PL_STRIDE = 9, PL_SN = 200, PL_SW = 24 };
 typedef struct place_fixture {
     unsigned char opaque[PL_TW * PL_TW];
     int sat[(PL_TW + 1) * (PL_TW + 1)];
-    float depth[258], expt[258];
+    float sd[(PL_SN + 1) * PL_SW], se[(PL_SN + 1) * PL_SW];
     float colw[(VS_BLOCK_PHASES + 1) * VS_VOXEL1_MAX], roww[(VS_BLOCK_PHASES + 1) * VS_VOXEL1_MAX];
 } place_fixture;
 
@@ -980,34 +982,33 @@ static int place_lane_same(const vs_placed *a, const vs_placed *b, int i, const 
 {
     int same = a->bx[i] == b->bx[i] && a->by[i] == b->by[i] && a->qx[i] == b->qx[i] && a->qy[i] == b->qy[i] &&
                !memcmp(&a->fx[i], &b->fx[i], sizeof(float)) && !memcmp(&a->fy[i], &b->fy[i], sizeof(float));
-    for (int j = 0; j < P->nd; j++) same &= !memcmp(&a->D[j][i], &b->D[j][i], sizeof(float));
-    for (int j = 0; P->with_e && j < P->nd; j++) same &= !memcmp(&a->E[j][i], &b->E[j][i], sizeof(float));
+    same &= !memcmp(a->D[i], b->D[i], (size_t)P->sw * sizeof(float));
+    if (P->with_e) same &= !memcmp(a->E[i], b->E[i], (size_t)P->sw * sizeof(float));
     if (P->colw)
         same &= !memcmp(a->cw[i], b->cw[i], (size_t)(P->bx + 8) * sizeof(float)) &&
                 !memcmp(a->rw[i], b->rw[i], (size_t)P->ny * sizeof(float));
     return same;
 }
 
-/* exp(-kappa b^2) by linear interpolation in the fixture's table */
-static float place_exp(const place_fixture *X, const vs_place_in *P, float b)
+/* entry j of a slab table at depth z, by its definition (simd/kernels.h
+ * vs_place_in): x = sscale (z - (opening slab + rz)) in [0, sn], the row
+ * below x (the last but one at sn) and the next mixed by x's fraction
+ * past it; in float, as the kernels must compute it */
+static float slab_entry(const float *tab, const vs_place_in *P, float z, int j)
 {
-    if (!(fabsf(b) < P->rz)) return 0.0f;
-    const float x = P->kappa * b * b * P->exp_scale;
-    if (!(x < (float)(P->exp_n - 1))) return 0.0f;
-    const int i = (int)floorf(x);
-    return X->expt[i] + (x - (float)i) * (X->expt[i + 1] - X->expt[i]);
+    const float start = (float)P->opening * P->slab + P->rz;
+    float x = (z - start) * P->sscale;
+    if (!(x >= 0.0f)) x = 0.0f;
+    if (x > (float)P->sn) x = (float)P->sn;
+    const int r = x >= (float)P->sn ? P->sn - 1 : (int)floorf(x);
+    const float t0 = tab[r * P->sw + j], t1 = tab[(r + 1) * P->sw + j];
+    return t0 + (x - (float)r) * (t1 - t0);
 }
 
 /* the reference against definitions that share none of its code */
 static int place_truth(const place_fixture *X, const vs_place_in *P, const float *xyz, int n, unsigned live,
                        const vs_placed *o)
 {
-    vs_footprint fp;
-    memset(&fp, 0, sizeof fp);
-    fp.rz = P->rz;
-    fp.depth_n = P->depth_n;
-    fp.depth_scale = P->depth_scale;
-    fp.depth_table = (float *)X->depth;
     vs_block_geom g;
     memset(&g, 0, sizeof g);
     g.rx0 = P->rx0;
@@ -1039,11 +1040,9 @@ static int place_truth(const place_fixture *X, const vs_place_in *P, const float
         vs_block_place_at(&g, x, y, &pl);
         bad += pl.x - P->ox != o->bx[i] || pl.y - P->oy != o->by[i] || pl.qx != o->qx[i] || pl.qy != o->qy[i] ||
                pl.fx != o->fx[i] || pl.fy != o->fy[i];
-        for (int j = 0; j < P->nd; j++) {
-            const float k0 = (float)(P->opening + j) * P->slab, k1 = (float)(P->opening + j + 1) * P->slab;
-            bad += vs_fp_depth(&fp, k1 - z) - vs_fp_depth(&fp, k0 - z) != o->D[j][i];
-            if (P->with_e) /* exp(-kappa b^2) from the table, 0 outside the kernel or the table */
-                bad += place_exp(X, P, k1 - z) - place_exp(X, P, k0 - z) != o->E[j][i];
+        for (int j = 0; j < P->sw; j++) {
+            bad += slab_entry(X->sd, P, z, j) != o->D[i][j];
+            if (P->with_e) bad += slab_entry(X->se, P, z, j) != o->E[i][j];
         }
         if (P->colw) {
             float cw[VS_VOXEL1_MAX + 8], rw[VS_VOXEL1_MAX];
@@ -1059,9 +1058,9 @@ static int place_truth(const place_fixture *X, const vs_place_in *P, const float
 static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
 {
     static place_fixture X;
-    for (int i = 0; i < 258; i++) {
-        X.depth[i] = (float)i / 256.0f + 1e-3f * frand(); /* rising, uneven */
-        X.expt[i] = expf(-(float)i / 64.0f) + 1e-3f * frand();
+    for (int i = 0; i < (PL_SN + 1) * PL_SW; i++) { /* in [-1, 1], uneven */
+        X.sd[i] = frand();
+        X.se[i] = frand();
     }
     for (size_t i = 0; i < sizeof X.colw / sizeof *X.colw; i++) {
         X.colw[i] = frand();
@@ -1100,17 +1099,15 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
         const float slabs[] = {1.0f, 0.5f, 0.37f, 1.7f};
         P.slab = slabs[trial % 4];
         P.rz = 2.0f;
-        P.depth_n = 257;
-        P.depth_scale = (float)(P.depth_n - 1) / (2.0f * P.rz);
-        P.depth = X.depth;
         P.nd = (int)ceilf(2.0f * P.rz / P.slab) + 1;
+        P.sw = (P.nd + 7) & ~7; /* 8, 16 or 24 */
+        P.sn = 1 + (int)((frand() + 1.0f) * 0.5f * (PL_SN - 1));
+        P.sscale = (float)P.sn / P.slab;
+        P.sd = X.sd;
         P.opening = (int)(40.0f * frand());
-        if (trial % 3 != 2) { /* the derivative integrals; a table that ends inside the kernel or past it */
+        if (trial % 3 != 2) { /* the derivative integrals */
             P.with_e = 1;
-            P.kappa = 0.6f + 0.3f * frand();
-            P.exp_n = 257;
-            P.exp_table = X.expt;
-            P.exp_scale = (float)(P.exp_n - 1) / (P.kappa * P.rz * P.rz * (trial % 2 ? 0.8f : 1.05f));
+            P.se = X.se;
         }
         if (trial % 2) { /* and the block's factors, 1..8 vectors wide, 1..64 rows */
             P.colw = X.colw;
@@ -1125,8 +1122,10 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
             c[1] = (float)P.ty0 + (frand() + 1.0f) * 0.5f * ((float)P.th + 2.0f * P.pad_y + 6.0f) - P.pad_y - 3.0f;
             if (i % 5 == 1) c[0] = floorf(c[0]); /* on a pixel edge */
             if (i % 5 == 2) c[1] = floorf(c[1]) + P.pad_y; /* reach ends on one */
-            /* depths from before the kernel's first slab to past its last */
+            /* kernels that start before, inside and past the first slab,
+             * some on a table row */
             c[2] = ((float)P.opening + 0.5f * (frand() + 1.0f)) * P.slab + P.rz + 0.7f * frand();
+            if (i % 7 == 3) c[2] = (float)P.opening * P.slab + P.rz + (float)(i % 3) / P.sscale;
         }
         for (int n = 0; n <= VS_PLACE_BATCH; n++) {
             vs_placed ro, oo;
@@ -1160,6 +1159,15 @@ static unsigned place_off(const float *xyz, int stride, int n, const vs_place_in
     vs_placed tmp;
     const unsigned short_reach = vs_place_voxels_scalar(xyz, stride, n, &Q, &tmp);
     return live & short_reach;
+}
+
+/* a kernel that leaves the kernel's depth radius out of where its first
+ * slab starts */
+static unsigned place_slab_off(const float *xyz, int stride, int n, const vs_place_in *P, vs_placed *out)
+{
+    vs_place_in Q = *P;
+    Q.rz = 0.0f;
+    return vs_place_voxels_scalar(xyz, stride, n, &Q, out);
 }
 
 static void check_dispatch(void)
@@ -1215,8 +1223,9 @@ int main(void)
     CHECK(check_rows_mix(NULL, vs_splat_rows_mix_scalar, rows_mix_off),
           "check_rows_mix cannot tell a wrong kernel from the reference");
     CHECK(check_place(NULL, vs_place_voxels_scalar, 1) == 0,
-          "place_voxels scalar reference disagrees with the brute-force occlusion, vs_block_place_at or vs_fp_depth");
+          "place_voxels scalar reference disagrees with the brute-force occlusion, vs_block_place_at or the slab tables");
     CHECK(check_place(NULL, place_off, 0) > 0, "check_place cannot tell a wrong kernel from the reference");
+    CHECK(check_place(NULL, place_slab_off, 0) > 0, "check_place cannot tell wrong depth integrals from the reference");
     if (best >= VS_ISA_SSE4) {
         check_row4("sse4", vs_splat_row4_sse4);
         check_block("sse4", vs_splat_block_sse4);

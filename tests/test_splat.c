@@ -534,6 +534,82 @@ static void test_context_reuse(void)
     for (int i = 0; i < 3; i++) vs_volume_release(v[i]);
 }
 
+/* The slab tables place_voxels reads (vs_footprint slab_d, slab_e):
+ * every row against the depth integrals in double at its own offset,
+ * between rows within the interpolation's error, and two conservation
+ * laws -- a voxel's integrals over its slabs add up to the whole kernel
+ * (erf), and the derivative's to 0 (the kernel is 0 at both ends) -- for
+ * slabs thinner and thicker than a voxel and two kernel radii. */
+static void test_slab_tables(void)
+{
+    const int dims[3] = {16, 16, 16};
+    const double spacing[3] = {1.0, 1.0, 1.0};
+    vs_volume *v = make_grid(dims, spacing, f_ball);
+    if (!v) {
+        CHECK(0, "volume: %s", vs_last_error(ctx));
+        return;
+    }
+    const double slabs[] = {1.0, 0.5, 0.3, 1.7, 4.0}, radii[] = {2.0, 3.0};
+    double worst_row = 0.0, worst_mid = 0.0, worst_sum = 0.0, worst_e = 0.0;
+    for (int si = 0; si < 5; si++)
+        for (int ri = 0; ri < 2; ri++) {
+            vs_settings s;
+            vs_settings_init(&s);
+            s.azimuth = 30;
+            s.elevation = 20;
+            s.slab = slabs[si];
+            s.kernel_radius = radii[ri];
+            vs_camera cam;
+            vs_footprint fp;
+            if (vs_camera_setup(ctx, v, &s, &cam) != VS_OK || vs_footprint_setup(ctx, &s, &cam, &fp) != VS_OK) {
+                CHECK(0, "footprint: %s", vs_last_error(ctx));
+                continue;
+            }
+            const double rz = fp.rz, sk = sqrt(fp.kappa), norm = 0.5 * sqrt(M_PI / fp.kappa);
+            const double whole = norm * (erf(sk * rz) - erf(-sk * rz));
+            const int nd = fp.vspan < VS_MAX_SHEETS_VOXEL ? fp.vspan : VS_MAX_SHEETS_VOXEL;
+            CHECK(fp.slab_w >= nd && fp.slab_w % 8 == 0, "slab %g: row of %d floats for %d slabs", s.slab,
+                  fp.slab_w, nd);
+            for (int h = 0; h <= 2 * fp.slab_n; h++) { /* the rows, and half-way between them */
+                const double phi = 0.5 * h * fp.slab / fp.slab_n;
+                const int r = h / 2 < fp.slab_n ? h / 2 : fp.slab_n - 1;
+                const double f = 0.5 * h - r;
+                double sum = 0.0, esum = 0.0;
+                for (int j = 0; j < fp.slab_w; j++) {
+                    const double d0 = fp.slab_d[r * fp.slab_w + j], d1 = fp.slab_d[(r + 1) * fp.slab_w + j];
+                    const double e0 = fp.slab_e[r * fp.slab_w + j], e1 = fp.slab_e[(r + 1) * fp.slab_w + j];
+                    const double d = d0 + f * (d1 - d0), e = e0 + f * (e1 - e0);
+                    double want = 0.0;
+                    if (j < nd) {
+                        double b0 = j * fp.slab - phi - rz, b1 = b0 + fp.slab;
+                        b0 = b0 < -rz ? -rz : b0 > rz ? rz : b0;
+                        b1 = b1 < -rz ? -rz : b1 > rz ? rz : b1;
+                        want = norm * (erf(sk * b1) - erf(sk * b0));
+                    } else {
+                        CHECK(d == 0.0 && e == 0.0, "slab %g: entry %d past the kernel's %d slabs is %g, %g",
+                              s.slab, j, nd, d, e);
+                    }
+                    const double err = fabs(d - want) / whole;
+                    if (h % 2 == 0 && err > worst_row) worst_row = err;
+                    if (h % 2 == 1 && err > worst_mid) worst_mid = err;
+                    sum += d;
+                    esum += e;
+                }
+                if (fabs(sum - whole) / whole > worst_sum) worst_sum = fabs(sum - whole) / whole;
+                if (fabs(esum) > worst_e) worst_e = fabs(esum);
+            }
+            vs_footprint_free(&fp);
+        }
+    vs_volume_release(v);
+    printf("slab tables: rows within %.2g, between rows %.2g of the kernel's integral; sums within %.2g, "
+           "derivative sums %.2g\n",
+           worst_row, worst_mid, worst_sum, worst_e);
+    CHECK(worst_row < 1e-6, "slab tables: a row is %.3g of the kernel's integral off its depth integral", worst_row);
+    CHECK(worst_mid < 2e-5, "slab tables: between rows %.3g off the depth integral", worst_mid);
+    CHECK(worst_sum < 2e-6, "slab tables: a voxel's integrals add up to the kernel's within %.3g only", worst_sum);
+    CHECK(worst_e < 1e-6, "slab tables: a voxel's derivative integrals add up to %.3g, not 0", worst_e);
+}
+
 /* A grid with equal x and y spacing turned about z (the CT head, 0.96 x
  * 0.96 x 1.5 mm) projects to an axis-aligned ellipse in every view; only
  * rounding in the rotation gives a cross term (1e-17..1e-33).  It must be
@@ -1031,6 +1107,7 @@ int main(void)
     test_context_reuse();
     test_skewed_blocks();
     test_footprint_cross_term();
+    test_slab_tables();
     test_skewed_tables();
     /* the sphere against its analytic definition */
     test_against_raycaster("sphere", 1, 256, 0.0, 30.0);
