@@ -33,14 +33,17 @@ _Static_assert(VS_MAX_VSPAN <= VS_MAX_SHEETS_VOXEL, "the splat_voxel kernels tak
 _Static_assert(VS_BRICK == 8 && VS_PROJECT_MAX >= VS_BRICK * VS_BRICK * VS_BRICK,
                "project_brick (simd/kernels.h) decodes 3-bit brick offsets of at most 512 voxels");
 
-/* Room for one more voxel in a bucket (a new bucket takes the spare array
- * of an emptied one); 0 when out of memory. */
+/* Room for one more voxel in a bucket (a new bucket takes the array an
+ * emptied one left last, while it is still in cache); 0 when out of
+ * memory. */
 static int grow_bucket(tile_state *ts, pend_bucket *bk)
 {
-    if (!bk->p && ts->spare) {
-        bk->p = ts->spare;
-        bk->cap = ts->spare_cap;
-        ts->spare = NULL;
+    vs_spares *sp = ts->spares;
+    if (!bk->p && sp->n > 0) {
+        sp->n--;
+        bk->p = sp->p[sp->n];
+        bk->cap = sp->cap[sp->n];
+        sp->bytes -= (size_t)bk->cap * sizeof(pend);
         return 1;
     }
     const int cap = bk->cap ? 2 * bk->cap : 256;
@@ -54,7 +57,7 @@ static int grow_bucket(tile_state *ts, pend_bucket *bk)
 /* A bucket no sheet reads again gives its array to the next new one. */
 static void retire_bucket(tile_state *ts, pend_bucket *bk)
 {
-    vs_keep_spare(&ts->spare, &ts->spare_cap, bk->p, bk->cap);
+    vs_keep_spare(ts->spares, bk->p, bk->cap);
     bk->p = NULL;
     bk->n = bk->cap = 0;
 }

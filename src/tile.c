@@ -34,7 +34,7 @@ void vs_tile_scratch_release(vs_tile_scratch *s, int n)
 {
     for (int i = 0; i < n; i++) {
         free(s[i].arena);
-        free(s[i].spare);
+        vs_spares_free(&s[i].spares);
         free(s[i].active);
         free(s[i].abox);
     }
@@ -211,14 +211,11 @@ void vs_tile_render(void *arg, int worker, int task)
     ts.sat = sat;
     ts.opaque = &opaque;
     ts.ws = ws;
-    ts.spare = scr->spare;
-    ts.spare_cap = scr->spare_cap;
+    ts.spares = &scr->spares;
     ts.active = scr->active;
     ts.abox = scr->abox;
     ts.cap_active = scr->cap_active;
     ts.cap_abox = scr->cap_abox;
-    scr->spare = NULL;
-    scr->spare_cap = 0;
     for (int y = 0; y < t.th; y++) {
         live0[y] = 0;
         live1[y] = t.tw;
@@ -367,8 +364,7 @@ void vs_tile_render(void *arg, int worker, int task)
     vs_composite_finish(&t, acc);
     /* leave the sheet buffers zero for the next tile, and the lists to it */
     for (int i = 0; i < R; i++) clear_rect(ring[i], t.stride, ch, &bbox[i]);
-    for (int b = 0; b < span && ts.bk; b++) vs_keep_spare(&scr->spare, &scr->spare_cap, ts.bk[b].p, ts.bk[b].cap);
-    vs_keep_spare(&scr->spare, &scr->spare_cap, ts.spare, ts.spare_cap);
+    for (int b = 0; b < span && ts.bk; b++) vs_keep_spare(&scr->spares, ts.bk[b].p, ts.bk[b].cap);
     scr->active = ts.active;
     scr->abox = ts.abox;
     scr->cap_active = ts.cap_active;

@@ -96,19 +96,46 @@ typedef struct pend {
     float w[4];    /* splat weights before the slab's depth integral */
 } pend;
 
-/* A voxel array no sheet reads again: the larger of it and the spare is
- * kept as the spare (for the next bucket, or the next tile), the other
- * freed. */
-static inline void vs_keep_spare(pend **spare, int *spare_cap, pend *p, int cap)
+/* Emptied bucket arrays kept for new buckets (of this tile, the next
+ * tiles and frames), so that buckets neither allocate nor grow by copying
+ * once the first tiles have run: up to VS_SPARES of them and
+ * VS_SPARE_BYTES together, the smallest given up for a larger one. */
+enum { VS_SPARES = 32, VS_SPARE_BYTES = 8 << 20 };
+typedef struct vs_spares {
+    pend *p[VS_SPARES];
+    int cap[VS_SPARES];
+    int n;
+    size_t bytes; /* their capacities together */
+} vs_spares;
+
+static inline void vs_keep_spare(vs_spares *s, pend *p, int cap)
 {
     if (!p) return;
-    if (!*spare || cap > *spare_cap) {
-        free(*spare);
-        *spare = p;
-        *spare_cap = cap;
-    } else {
-        free(p);
+    const size_t b = (size_t)cap * sizeof(pend);
+    while (s->n > 0 && (s->n == VS_SPARES || s->bytes + b > VS_SPARE_BYTES)) {
+        int m = 0; /* the smallest kept one, if p is larger */
+        for (int i = 1; i < s->n; i++)
+            if (s->cap[i] < s->cap[m]) m = i;
+        if (s->cap[m] >= cap) break;
+        free(s->p[m]);
+        s->bytes -= (size_t)s->cap[m] * sizeof(pend);
+        s->p[m] = s->p[--s->n];
+        s->cap[m] = s->cap[s->n];
     }
+    if (s->n == VS_SPARES || s->bytes + b > VS_SPARE_BYTES) {
+        free(p);
+        return;
+    }
+    s->p[s->n] = p;
+    s->cap[s->n++] = cap;
+    s->bytes += b;
+}
+
+static inline void vs_spares_free(vs_spares *s)
+{
+    for (int i = 0; i < s->n; i++) free(s->p[i]);
+    s->n = 0;
+    s->bytes = 0;
 }
 
 /* The voxels whose first sheet is one sheet, in the order they came. */
@@ -124,8 +151,7 @@ typedef struct pend_bucket {
 typedef struct tile_state {
     const tile_ctx *t;
     pend_bucket *bk;  /* bucket of sheet k at k - kmin                   */
-    pend *spare;      /* an emptied bucket's array, for the next new one  */
-    int spare_cap;
+    vs_spares *spares; /* emptied arrays, for new buckets (the scratch's) */
     int kmin, kmax;
     pend **active;    /* sheet-at-a-time path: voxels overlapping the sheet */
     float (*abox)[5]; /* perspective: each active voxel's voxel_box (box
@@ -148,8 +174,7 @@ typedef struct vs_tile_scratch {
     size_t cap;
     size_t zeroed;   /* the arena's first bytes that are zero but for the
                         boxes the last tile touched and cleared */
-    pend *spare;     /* an emptied bucket's array */
-    int spare_cap;
+    vs_spares spares; /* emptied bucket arrays */
     pend **active;   /* sheet-at-a-time path */
     float (*abox)[5];
     int cap_active, cap_abox;
