@@ -228,7 +228,9 @@ typedef struct voxel_job {
     int opening, kl;          /* its first and last sheet                       */
     const int *slots;         /* ring slot of sheet opening + j                 */
     float *const *ring;
-    rect *bbs;                /* each slot's touched box                        */
+    rect *last;               /* by a voxel's last sheet reached (j), the union
+                                 of those voxels' boxes: each slot's touched box
+                                 grows once a sheet, not once a section        */
     rect box;                 /* the block's part inside the buffer             */
     ptrdiff_t off, ds;        /* its offset in a sheet, floats per buffer row   */
     int j0, j1, v0, v1;       /* its rows and vectors inside the buffer         */
@@ -239,21 +241,23 @@ typedef struct voxel_job {
 /* Voxel at a time: the sheets opening..kl that a voxel's block reaches with
  * a positive depth integral D[j] (j = k - opening): their
  * destinations (the block's offset in their ring slot) and weights wv[c] D
- * (nc channels); each sheet's touched box grown by the block's.  Returns how
- * many.  Inlined with nc constant.  (Post-gs writes the same loop with its
- * four gradient weights: through this helper it measured 3 % slower.) */
+ * (nc channels); the box of the last one grown by the block's (the sheets
+ * a kernel reaches with D > 0 are consecutive from its first: activate_sheet
+ * grows every sheet's box from these).  Returns how many.  Inlined with nc
+ * constant.  (Post-gs writes the same loop with its four gradient weights:
+ * through this helper it measured 3 % slower.) */
 static inline int reached_sheets(const voxel_job *j, int nc, float **dst, float *w)
 {
-    int ns = 0;
+    int ns = 0, last = -1;
     for (int i = 0; i <= j->kl - j->opening; i++) {
         const float Dk = j->D[i];
         if (!(Dk > 0.0f)) continue;
-        const int slot = j->slots[i];
-        dst[ns] = j->ring[slot] + j->off;
+        dst[ns] = j->ring[j->slots[i]] + j->off;
         for (int c = 0; c < nc; c++) w[nc * ns + c] = j->wv[c] * Dk;
         ns++;
-        rect_merge(&j->bbs[slot], &j->box);
+        last = i;
     }
+    if (last >= 0) rect_merge(&j->last[last], &j->box);
     return ns;
 }
 
@@ -308,17 +312,17 @@ static inline int splat_gradient(const voxel_job *j)
     const float A = fp->A, rk = fp->row_k;
     const float *wv = j->wv;
     float *dst[VS_MAX_VSPAN], w[4 * VS_MAX_VSPAN];
-    int ns = 0;
+    int ns = 0, last = -1;
     for (int k = j->opening; k <= j->kl; k++) { /* as reached_sheets, with the gradient weights */
         const int i = k - j->opening;
         const float Dk = j->D[i];
         if (!(Dk > 0.0f)) continue;
-        const int slot = j->slots[i];
-        dst[ns] = j->ring[slot] + j->off;
+        dst[ns] = j->ring[j->slots[i]] + j->off;
         gradient_weights(wv, Dk, j->E[i], A, rk, &w[4 * ns]);
         ns++;
-        rect_merge(&j->bbs[slot], &j->box);
+        last = i;
     }
+    if (last >= 0) rect_merge(&j->last[last], &j->box);
     /* offsets from the centre (vs_block_build): column i lies
      * i + ux - rx0 away, row j lies j + uy - ry0 away */
     float dx[VS_VOXEL1_MAX + 8], dy[VS_BLOCK_MAX_SPAN];
@@ -404,6 +408,8 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                            .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
     const sheet_geom unscaled = {g, 1.0f, 1.0f}; /* sheared_blocks: orthographic sections */
+    rect last[VS_MAX_VSPAN]; /* voxel_job last */
+    for (int j = 0; j < P.nd; j++) rect_clear(&last[j]);
     vs_placed pv;
     for (int i0 = 0; i0 < bk->n; i0 += VS_PLACE_BATCH) {
         const int nb = bk->n - i0 < VS_PLACE_BATCH ? bk->n - i0 : VS_PLACE_BATCH;
@@ -457,7 +463,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                                   .fx = pv.fx[lane], .fy = pv.fy[lane]};
             const voxel_job job = {.t = t, .g = g, .wv = wvs[lane], .D = pv.D[lane], .E = pv.E[lane],
                                    .ex = e->x, .ey = e->y, .opening = opening, .kl = kl,
-                                   .slots = slots, .ring = ring, .bbs = bbs,
+                                   .slots = slots, .ring = ring, .last = last,
                                    .box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1},
                                    .off = (ptrdiff_t)(by + j0) * ((ptrdiff_t)t->stride * ch) +
                                           (ptrdiff_t)(bx + v0 * ppv) * ch,
@@ -491,6 +497,13 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                 rect_merge(&bbs[slot], &job.box);
             }
         }
+    }
+    /* sheet opening + j is touched by the voxels whose last sheet is j or later */
+    rect grow;
+    rect_clear(&grow);
+    for (int j = P.nd - 1; j >= 0; j--) {
+        rect_merge(&grow, &last[j]);
+        rect_merge(&bbs[slots[j]], &grow);
     }
     vs_worker_stats *ws = ts->ws;
     ws->culled += n_culled;
