@@ -87,6 +87,9 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
     fp->b = vs_kernel_b(fp->R);
     fp->emax = fp->a * fp->R * fp->R;
     fp->slab = s->slab;
+    fp->slab_d = fp->slab_e = NULL; /* vs_footprint_slab_tables */
+    fp->slab_n = fp->slab_w = 0;
+    fp->slab_scale = 0.0f;
     /* Q = a Minv^T Minv (view space, Minv maps view -> index) */
     double Q[3][3];
     for (int r = 0; r < 3; r++)
@@ -138,17 +141,7 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
     if (fp->depth_n > (1 << 24)) fp->depth_n = 1 << 24;
     fp->depth_scale = (float)((fp->depth_n - 1) / (2.0 * fp->rz));
     fp->depth_table = malloc((size_t)(fp->depth_n + 1) * sizeof(float));
-    /* the slab tables: a row of integrals per 1/depth_resolution of phi
-     * (at most 2^14 rows), so that a voxel reads one row pair, not a
-     * depth-table pair per slab boundary */
-    const int nd = fp->vspan < VS_MAX_SHEETS_VOXEL ? fp->vspan : VS_MAX_SHEETS_VOXEL;
-    const double rows = ceil(fp->slab * s->depth_resolution);
-    fp->slab_n = rows < 1.0 ? 1 : rows > (1 << 14) ? 1 << 14 : (int)rows;
-    fp->slab_w = (nd + 7) & ~7;
-    fp->slab_scale = (float)(fp->slab_n / fp->slab);
-    fp->slab_d = malloc((size_t)(fp->slab_n + 1) * fp->slab_w * sizeof(float));
-    fp->slab_e = malloc((size_t)(fp->slab_n + 1) * fp->slab_w * sizeof(float));
-    if (!fp->exp_table || !fp->depth_table || !fp->slab_d || !fp->slab_e) {
+    if (!fp->exp_table || !fp->depth_table) {
         vs_footprint_free(fp);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "footprint tables: out of memory");
     }
@@ -161,19 +154,46 @@ vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_cam
         if (z > fp->rz) z = fp->rz;
         fp->depth_table[i] = (float)(0.5 * sqrt(M_PI / fp->kappa) * (erf(sk * z) - base));
     }
+    return VS_OK;
+}
+
+vs_status vs_footprint_slab_tables(vs_context *ctx, const vs_settings *s, vs_footprint *fp)
+{
+    /* a row of integrals per 1/depth_resolution of phi (at most 2^14
+     * rows), so that a voxel reads one row pair, not a depth-table pair
+     * per slab boundary */
+    const int nd = fp->vspan < VS_MAX_SHEETS_VOXEL ? fp->vspan : VS_MAX_SHEETS_VOXEL;
+    const double rows = ceil(fp->slab * s->depth_resolution);
+    fp->slab_n = rows < 1.0 ? 1 : rows > (1 << 14) ? 1 << 14 : (int)rows;
+    fp->slab_w = (nd + 7) & ~7;
+    fp->slab_scale = (float)(fp->slab_n / fp->slab);
+    free(fp->slab_d);
+    free(fp->slab_e);
+    fp->slab_d = malloc((size_t)(fp->slab_n + 1) * fp->slab_w * sizeof(float));
+    fp->slab_e = malloc((size_t)(fp->slab_n + 1) * fp->slab_w * sizeof(float));
+    if (!fp->slab_d || !fp->slab_e) {
+        vs_footprint_free(fp);
+        return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "footprint tables: out of memory");
+    }
+    const double sk = sqrt(fp->kappa), norm = 0.5 * sqrt(M_PI / fp->kappa);
     for (int r = 0; r <= fp->slab_n; r++) {
         const double phi = r * fp->slab / fp->slab_n;
         float *d = fp->slab_d + (size_t)r * fp->slab_w, *e = fp->slab_e + (size_t)r * fp->slab_w;
-        for (int j = 0; j < fp->slab_w; j++) {
-            /* the slab's ends, from the voxel's centre */
-            const double b0 = j * fp->slab - phi - fp->rz, b1 = b0 + fp->slab;
-            const double t0 = b0 < -fp->rz ? -fp->rz : b0 > fp->rz ? fp->rz : b0;
-            const double t1 = b1 < -fp->rz ? -fp->rz : b1 > fp->rz ? fp->rz : b1;
-            const double e0 = fabs(b0) < fp->rz ? exp(-fp->kappa * b0 * b0) : 0.0;
-            const double e1 = fabs(b1) < fp->rz ? exp(-fp->kappa * b1 * b1) : 0.0;
-            d[j] = j < nd ? (float)(0.5 * sqrt(M_PI / fp->kappa) * (erf(sk * t1) - erf(sk * t0))) : 0.0f;
-            e[j] = j < nd ? (float)(e1 - e0) : 0.0f;
+        /* the slabs' ends, from the voxel's centre: one erf and one exp
+         * each, shared by the slabs either side */
+        double g0 = 0.0, x0 = 0.0;
+        for (int j = 0; j <= nd; j++) {
+            const double b = j * fp->slab - phi - fp->rz;
+            const double t = b < -fp->rz ? -fp->rz : b > fp->rz ? fp->rz : b;
+            const double g = erf(sk * t), x = fabs(b) < fp->rz ? exp(-fp->kappa * b * b) : 0.0;
+            if (j > 0) {
+                d[j - 1] = (float)(norm * (g - g0));
+                e[j - 1] = (float)(x - x0);
+            }
+            g0 = g;
+            x0 = x;
         }
+        for (int j = nd; j < fp->slab_w; j++) d[j] = e[j] = 0.0f;
     }
     return VS_OK;
 }

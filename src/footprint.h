@@ -58,7 +58,9 @@ typedef struct vs_footprint {
      * starts phi = r / slab_scale into its first slab (r = 0..slab_n),
      * holds slab_w floats, the integrals over slabs 0..vspan-1 (at most
      * VS_MAX_SHEETS_VOXEL) and then zeros; slab_d of exp(-kappa t^2),
-     * slab_e of its derivative (exp at the slab's ends, 0 past rz) */
+     * slab_e of its derivative (exp at the slab's ends, 0 past rz).
+     * Made by vs_footprint_slab_tables, only for the voxel-at-a-time
+     * paths that read them; NULL otherwise */
     int slab_n, slab_w;
     float slab_scale;
     float *slab_d, *slab_e;
@@ -66,6 +68,9 @@ typedef struct vs_footprint {
 
 vs_status vs_footprint_setup(vs_context *ctx, const vs_settings *s, const vs_camera *cam,
                              vs_footprint *fp);
+/* The slab tables above (after vs_footprint_setup); on failure the
+ * footprint is freed. */
+vs_status vs_footprint_slab_tables(vs_context *ctx, const vs_settings *s, vs_footprint *fp);
 
 /* The in-sheet footprint seen s times larger (a perspective sheet): the
  * quadratic form in pixels shrinks by s^2; the tables are shared, read

@@ -970,7 +970,7 @@ static void voxel4_off(float *const *dst, const float *w, int ns, ptrdiff_t ds, 
  * vs_block_place_at and the slab tables' interpolation written out.
  * Returns the mismatching cases.  (check_slab_tables checks the tables a
  * footprint makes against the integrals in double.) */
-enum { PL_TW = 70, PL_STRIDE = 9, PL_SN = 200, PL_SW = 24 };
+enum { PL_TW = 70, PL_STRIDE = 9, PL_SN = 200, PL_SW = VS_MAX_SHEETS_VOXEL };
 typedef struct place_fixture {
     unsigned char opaque[PL_TW * PL_TW];
     int sat[(PL_TW + 1) * (PL_TW + 1)];
@@ -1096,11 +1096,12 @@ static int check_place(const char *isa, vs_place_voxels_fn fn, int truth)
         P.phases = (float)VS_BLOCK_PHASES;
         P.ox = P.tx0 - 1;
         P.oy = P.ty0 - 1;
-        const float slabs[] = {1.0f, 0.5f, 0.37f, 1.7f};
-        P.slab = slabs[trial % 4];
+        /* 3..64 slabs a kernel: rows of 8, 16, 24 and 64 floats */
+        const float slabs[] = {1.0f, 0.5f, 0.37f, 1.7f, 0.22f, 0.064f};
+        P.slab = slabs[trial % 6];
         P.rz = 2.0f;
         P.nd = (int)ceilf(2.0f * P.rz / P.slab) + 1;
-        P.sw = (P.nd + 7) & ~7; /* 8, 16 or 24 */
+        P.sw = (P.nd + 7) & ~7;
         P.sn = 1 + (int)((frand() + 1.0f) * 0.5f * (PL_SN - 1));
         P.sscale = (float)P.sn / P.slab;
         P.sd = X.sd;

@@ -539,7 +539,9 @@ static void test_context_reuse(void)
  * between rows within the interpolation's error, and two conservation
  * laws -- a voxel's integrals over its slabs add up to the whole kernel
  * (erf), and the derivative's to 0 (the kernel is 0 at both ends) -- for
- * slabs thinner and thicker than a voxel and two kernel radii. */
+ * slabs thinner and thicker than a voxel and two kernel radii; and the
+ * reference place_voxels reading them (the rows' scale included) against
+ * each slab's integral from the voxel's own depth. */
 static void test_slab_tables(void)
 {
     const int dims[3] = {16, 16, 16};
@@ -550,7 +552,7 @@ static void test_slab_tables(void)
         return;
     }
     const double slabs[] = {1.0, 0.5, 0.3, 1.7, 4.0}, radii[] = {2.0, 3.0};
-    double worst_row = 0.0, worst_mid = 0.0, worst_sum = 0.0, worst_e = 0.0;
+    double worst_row = 0.0, worst_mid = 0.0, worst_sum = 0.0, worst_e = 0.0, worst_place = 0.0;
     for (int si = 0; si < 5; si++)
         for (int ri = 0; ri < 2; ri++) {
             vs_settings s;
@@ -565,9 +567,54 @@ static void test_slab_tables(void)
                 CHECK(0, "footprint: %s", vs_last_error(ctx));
                 continue;
             }
+            CHECK(!fp.slab_d && !fp.slab_e, "slab tables made before they are asked for");
+            if (vs_footprint_slab_tables(ctx, &s, &fp) != VS_OK) {
+                CHECK(0, "slab tables: %s", vs_last_error(ctx));
+                continue;
+            }
             const double rz = fp.rz, sk = sqrt(fp.kappa), norm = 0.5 * sqrt(M_PI / fp.kappa);
             const double whole = norm * (erf(sk * rz) - erf(-sk * rz));
             const int nd = fp.vspan < VS_MAX_SHEETS_VOXEL ? fp.vspan : VS_MAX_SHEETS_VOXEL;
+            /* the rows' spacing the kernels read them at */
+            CHECK(fabs(fp.slab_scale * fp.slab - fp.slab_n) <= 1e-6 * fp.slab_n,
+                  "slab %g: scale %g a unit for %d rows a slab", s.slab, fp.slab_scale, fp.slab_n);
+            /* the reference kernel reading these tables, for voxels at any
+             * depth of their first slab, against the integral over each
+             * sheet's slab straight from the voxel's depth */
+            for (int n = 0; n < 64; n++) {
+                vs_place_in P;
+                memset(&P, 0, sizeof P);
+                P.tw = P.th = 32;
+                P.rx0 = P.ry0 = 2.0f;
+                P.phases = (float)VS_BLOCK_PHASES;
+                P.slab = (float)fp.slab;
+                P.rz = (float)fp.rz;
+                P.sd = fp.slab_d;
+                P.se = fp.slab_e;
+                P.with_e = 1;
+                P.sscale = fp.slab_scale;
+                P.sn = fp.slab_n;
+                P.sw = fp.slab_w;
+                P.opening = n % 7;
+                P.nd = nd;
+                const float z = (float)((P.opening + (n + 0.5) / 64.0) * fp.slab + fp.rz);
+                const float xyz[3] = {10.0f, 10.0f, z};
+                static vs_placed o;
+                if (vs_place_voxels_scalar(xyz, 3, 1, &P, &o) != 1u) {
+                    CHECK(0, "slab %g: a voxel without an occlusion test not placed", s.slab);
+                    continue;
+                }
+                double dsum = 0.0;
+                for (int j = 0; j < nd; j++) {
+                    const double k0 = (double)(P.opening + j) * fp.slab - z, k1 = k0 + fp.slab;
+                    const double lo = fmin(rz, fmax(-rz, k0)), hi = fmin(rz, fmax(-rz, k1));
+                    const double want = norm * (erf(sk * hi) - erf(sk * lo));
+                    const double err = fabs(o.D[0][j] - want) / whole;
+                    if (err > worst_place) worst_place = err;
+                    dsum += o.D[0][j];
+                }
+                if (fabs(dsum - whole) / whole > worst_sum) worst_sum = fabs(dsum - whole) / whole;
+            }
             CHECK(fp.slab_w >= nd && fp.slab_w % 8 == 0, "slab %g: row of %d floats for %d slabs", s.slab,
                   fp.slab_w, nd);
             for (int h = 0; h <= 2 * fp.slab_n; h++) { /* the rows, and half-way between them */
@@ -601,9 +648,10 @@ static void test_slab_tables(void)
             vs_footprint_free(&fp);
         }
     vs_volume_release(v);
-    printf("slab tables: rows within %.2g, between rows %.2g of the kernel's integral; sums within %.2g, "
-           "derivative sums %.2g\n",
-           worst_row, worst_mid, worst_sum, worst_e);
+    printf("slab tables: rows within %.2g, between rows %.2g of the kernel's integral, as placed %.2g; sums "
+           "within %.2g, derivative sums %.2g\n",
+           worst_row, worst_mid, worst_place, worst_sum, worst_e);
+    CHECK(worst_place < 1e-5, "slab tables: a placed voxel's integral is %.3g off its slab's", worst_place);
     CHECK(worst_row < 1e-6, "slab tables: a row is %.3g of the kernel's integral off its depth integral", worst_row);
     CHECK(worst_mid < 2e-5, "slab tables: between rows %.3g off the depth integral", worst_mid);
     CHECK(worst_sum < 2e-6, "slab tables: a voxel's integrals add up to the kernel's within %.3g only", worst_sum);
