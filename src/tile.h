@@ -112,19 +112,26 @@ static inline void vs_keep_spare(vs_spares *s, pend *p, int cap)
 {
     if (!p) return;
     const size_t b = (size_t)cap * sizeof(pend);
-    while (s->n > 0 && (s->n == VS_SPARES || s->bytes + b > VS_SPARE_BYTES)) {
-        int m = 0; /* the smallest kept one, if p is larger */
+    /* room once every smaller array went? else p goes and they stay */
+    size_t smaller = 0;
+    int nsmaller = 0;
+    for (int i = 0; i < s->n; i++)
+        if (s->cap[i] < cap) {
+            smaller += (size_t)s->cap[i] * sizeof(pend);
+            nsmaller++;
+        }
+    if (b > VS_SPARE_BYTES || s->n - nsmaller == VS_SPARES || s->bytes - smaller + b > VS_SPARE_BYTES) {
+        free(p);
+        return;
+    }
+    while (s->n == VS_SPARES || s->bytes + b > VS_SPARE_BYTES) { /* the smallest first */
+        int m = 0;
         for (int i = 1; i < s->n; i++)
             if (s->cap[i] < s->cap[m]) m = i;
-        if (s->cap[m] >= cap) break;
         free(s->p[m]);
         s->bytes -= (size_t)s->cap[m] * sizeof(pend);
         s->p[m] = s->p[--s->n];
         s->cap[m] = s->cap[s->n];
-    }
-    if (s->n == VS_SPARES || s->bytes + b > VS_SPARE_BYTES) {
-        free(p);
-        return;
     }
     s->p[s->n] = p;
     s->cap[s->n++] = cap;
