@@ -241,11 +241,13 @@ typedef struct voxel_job {
 /* Voxel at a time: the sheets opening..kl that a voxel's block reaches with
  * a positive depth integral D[j] (j = k - opening): their
  * destinations (the block's offset in their ring slot) and weights wv[c] D
- * (nc channels); the box of the last one grown by the block's (the sheets
- * a kernel reaches with D > 0 are consecutive from its first: activate_sheet
- * grows every sheet's box from these).  Returns how many.  Inlined with nc
- * constant.  (Post-gs writes the same loop with its four gradient weights:
- * through this helper it measured 3 % slower.) */
+ * (nc channels); the box of the last one grown by the block's.
+ * activate_sheet grows each sheet's box by the boxes of that sheet and
+ * every later one: that covers every sheet a voxel writes, none lying
+ * past its last (a sheet before it with D = 0 gets a box it did not need,
+ * never one too small).  Returns how many.  Inlined with nc constant.
+ * (Post-gs writes the same loop with its four gradient weights: through
+ * this helper it measured 3 % slower.) */
 static inline int reached_sheets(const voxel_job *j, int nc, float **dst, float *w)
 {
     int ns = 0, last = -1;
