@@ -240,12 +240,18 @@ static int vp_to_image(const vp_peer *p, vs_image *out)
 
 /* ---- configurations ---- */
 
-enum { NVS = 4, NCONF = NVS + 2 }; /* 4 vsplat pipelines, VolPack (matched), VolPack (suggested) */
+/* the 4 vsplat pipelines, post-cd from the level of detail whose voxels
+ * lie up to 5 pixels apart (level 1 on both heads: at or above VolPack's
+ * PSNR, so the two compare at equal fidelity), VolPack (matched), VolPack
+ * (suggested) */
+enum { NVS = 5, NCONF = NVS + 2 };
 
 typedef struct peer_conf {
     const char *label;
     int volpack;      /* 0: vsplat; 1, 2: VolPack with vsplat's / the manual's thresholds */
     vs_pipeline pipeline;
+    double lod_px;    /* vsplat's lod_pixels; 0: the settings' */
+    int level;        /* the level of detail its first view splatted */
     vs_context *ctx;
     vp_peer vp;
     double *ms;
@@ -297,8 +303,15 @@ static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
     const int size = base.width, threads = base.threads;
     const double iso = base.iso_lo, ramp = base.ramp;
 
-    static const vs_pipeline pipes[NVS] = {VS_PIPELINE_POST_CD, VS_PIPELINE_PRE, VS_PIPELINE_POST_GS,
-                                           VS_PIPELINE_POST_ALPHA};
+    static const struct {
+        vs_pipeline pipeline;
+        double lod_px;
+        const char *label;
+    } pipes[NVS] = {{VS_PIPELINE_POST_CD, 0, NULL},
+                    {VS_PIPELINE_PRE, 0, NULL},
+                    {VS_PIPELINE_POST_GS, 0, NULL},
+                    {VS_PIPELINE_POST_ALPHA, 0, NULL},
+                    {VS_PIPELINE_POST_CD, 5.0, "post-cd lod 5"}};
     peer_conf conf[NCONF];
     memset(conf, 0, sizeof conf);
     for (int c = 0; c < NCONF; c++) {
@@ -306,8 +319,9 @@ static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
         pc->ms = calloc((size_t)runs * nviews, sizeof *pc->ms);
         if (!pc->ms) failed = 1;
         if (c < NVS) {
-            pc->pipeline = pipes[c];
-            pc->label = vs_pipeline_name(pipes[c]);
+            pc->pipeline = pipes[c].pipeline;
+            pc->lod_px = pipes[c].lod_px;
+            pc->label = pipes[c].label ? pipes[c].label : vs_pipeline_name(pipes[c].pipeline);
             pc->threads = threads;
             if (vs_context_create(&pc->ctx) != VS_OK) failed = 1;
         } else {
@@ -351,12 +365,14 @@ static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
         } else {
             vs_settings s = base;
             s.pipeline = pc->pipeline;
+            if (pc->lod_px > 0) s.lod_pixels = pc->lod_px;
             vs_stats st;
             if (vs_render(pc->ctx, vol, &s, &pc->first, &st) != VS_OK) {
                 fprintf(stderr, "vsplat-bench: peers %s %s: %s\n", pd->name, pc->label, vs_last_error(pc->ctx));
                 pc->fail = 1;
             } else {
                 pc->threads = st.threads;
+                pc->level = st.lod_level;
             }
         }
         if (!pc->fail && vs_image_compare(conf[0].ctx, &ref, &pc->first, &pc->d) == VS_OK) pc->have_d = 1;
@@ -378,6 +394,7 @@ static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
                 } else {
                     vs_settings s = base;
                     s.pipeline = pc->pipeline;
+                    if (pc->lod_px > 0) s.lod_pixels = pc->lod_px;
                     s.azimuth = az;
                     vs_image img = {0, 0, NULL};
                     vs_stats st;
@@ -416,19 +433,19 @@ static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
         sum[c].max = pc->ms[pc->nms - 1];
         if (pc->volpack == 1) vp_med = sum[c].median;
     }
-    printf("%-17s %7s %10s %19s %10s %8s %7s\n", "renderer", "threads", "median_ms", "min-max", "vs_volpack",
+    printf("%-21s %7s %10s %19s %10s %8s %7s\n", "renderer", "threads", "median_ms", "min-max", "vs_volpack",
            "psnr_dB", "ssim");
     for (int c = 0; c < NCONF; c++) {
         peer_conf *pc = &conf[c];
         char name[32];
         snprintf(name, sizeof name, "%s%s", pc->volpack ? "" : "vsplat ", pc->label);
         if (pc->fail) {
-            printf("%-17s failed\n", name);
+            printf("%-21s failed\n", name);
             failed = 1;
             continue;
         }
         double ratio = sum[c].median / vp_med;
-        printf("%-17s %7d %10.2f %9.2f-%-9.2f %9.2fx %8.2f %7.4f\n", name, pc->threads, sum[c].median, sum[c].min,
+        printf("%-21s %7d %10.2f %9.2f-%-9.2f %9.2fx %8.2f %7.4f\n", name, pc->threads, sum[c].median, sum[c].min,
                sum[c].max, ratio, pc->have_d ? pc->d.psnr : NAN, pc->have_d ? pc->d.ssim : NAN);
         fprintf(csv, "%s,%s,%d,%s,%s,%d,%d,%.3f,%.3f,%.3f,%.4f,%.4f,%.5f\n", pd->name, key, size,
                 pc->volpack ? "volpack" : "vsplat", pc->label, pc->threads, pc->nms, sum[c].median, sum[c].min,
@@ -437,6 +454,9 @@ static int run_peer(const bench_opts *o, const bench_peer_case *pd, FILE *csv)
             fprintf(stderr, "peers %s %s: note: %d timed frames rebuilt the relevant-voxel list\n", pd->name,
                     pc->label, pc->rebuilds);
     }
+    for (int c = 0; c < NVS; c++)
+        if (conf[c].lod_px > 0 && !conf[c].fail)
+            printf("(vsplat %s: level %d of the volume's levels of detail)\n", conf[c].label, conf[c].level);
     fflush(csv);
     if (!conf[0].fail && !conf[NVS].fail) {
         const vs_image *imgs[3] = {&ref, &conf[0].first, &conf[NVS].first};
