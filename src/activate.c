@@ -145,6 +145,50 @@ void vs_expand_brick(tile_state *ts, uint32_t b, int opening)
     }
 }
 
+/* Sections of one sheet waiting to be placed together: perspective sheets
+ * whose footprints are a column times a row weight (raster_unskewed's
+ * case) get their placement and factors from place_voxels, 16 sections a
+ * call, and are added in the order they came, as raster_unskewed adds
+ * them, to the same floats. */
+typedef struct section_batch {
+    int n;
+    float xyz[3 * VS_PLACE_BATCH]; /* the sections' centres */
+    float D[VS_PLACE_BATCH];
+    const float *w[VS_PLACE_BATCH];
+} section_batch;
+
+static void flush_sections(tile_state *ts, section_batch *sb, const vs_place_in *P, const vs_block_geom *g,
+                           float *dst, rect *bb)
+{
+    const tile_ctx *t = ts->t;
+    const vs_frame *F = t->F;
+    const int ch = F->stages->ch, ppv = 8 / ch;
+    const int nvec = (g->nx * ch + 7) / 8; /* the footprint's vectors (nx pixels) */
+    const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
+    vs_placed pv;
+    F->kern.place_voxels(sb->xyz, 3, sb->n, P, &pv);
+    for (int l = 0; l < sb->n; l++) {
+        const int bx = pv.bx[l], by = pv.by[l];
+        const int v0 = bx < 0 ? -bx / ppv : 0;
+        int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+        if (v1 > nvec) v1 = nvec;
+        const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+        if (j0 >= j1 || v0 >= v1) continue;
+        float *d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+        const float *cw = pv.cw[l] + v0 * ppv, *rw = pv.rw[l] + j0;
+        float w[4];
+        for (int c = 0; c < ch; c++) w[c] = sb->w[l][c] * sb->D[l];
+        if (ch == 1)
+            F->kern.splat_voxel1(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+        else
+            F->kern.splat_voxel4(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+        const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
+        rect_merge(bb, &box);
+        ts->ws->floats += 8 * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
+    }
+    sb->n = 0;
+}
+
 /* Sheet at a time (general footprints): rasterize sheet k into `dst` from
  * the voxels overlapping it; retire those that ended, admit those that start
  * here, cull occluded ones. */
@@ -191,6 +235,36 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
             voxel_box(F, e->x, e->y, e->z, ts->abox[ts->nactive], &ts->abox[ts->nactive][4]);
         ts->active[ts->nactive++] = &bk->p[i];
     }
+    /* perspective sheets whose sections take the fused kernels
+     * (vs_raster_skewed's raster_unskewed case) place them in batches */
+    const vs_block_geom *bg = sh.g;
+    const int batched = persp && bg && t->fp->row_shift == 0.0f && !F->stages->gradient_splats &&
+                        bg->bx <= VS_VOXEL1_MAX && bg->ny <= VS_VOXEL1_MAX && F->fp.slab_d;
+    section_batch sbat;
+    sbat.n = 0;
+    vs_place_in P;
+    memset(&P, 0, sizeof P);
+    if (batched) {
+        /* no occlusion test (the voxel's own, below) and depth integrals
+         * not read (make_section's): one slab of the frame's tables */
+        P.rx0 = bg->rx0;
+        P.ry0 = bg->ry0;
+        P.phases = (float)VS_BLOCK_PHASES;
+        P.ox = t->ox;
+        P.oy = t->oy;
+        P.slab = (float)F->fp.slab;
+        P.rz = (float)F->fp.rz;
+        P.sd = F->fp.slab_d;
+        P.sscale = F->fp.slab_scale;
+        P.sn = F->fp.slab_n;
+        P.sw = F->fp.slab_w;
+        P.opening = k;
+        P.nd = 1;
+        P.colw = bg->colw;
+        P.roww = bg->roww;
+        P.bx = bg->bx;
+        P.ny = bg->ny;
+    }
     for (int a = 0; a < ts->nactive; a++) {
         pend *e = ts->active[a];
         if (F->s->occlusion && *ts->opaque > 0) {
@@ -209,11 +283,21 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         section sec;
         if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
-        if (sec.g)
+        if (batched) {
+            float *c = sbat.xyz + 3 * sbat.n;
+            c[0] = sec.cx;
+            c[1] = sec.cy;
+            c[2] = P.slab * (float)k + P.rz;
+            sbat.D[sbat.n] = sec.D;
+            sbat.w[sbat.n++] = e->w;
+            if (sbat.n == VS_PLACE_BATCH) flush_sections(ts, &sbat, &P, bg, dst, bb);
+        } else if (sec.g) {
             vs_raster_skewed(t, &sec, e->w, F->stages->ch, dst, bb, NULL);
-        else
+        } else {
             F->stages->raster(t, &sec, e->w, dst, bb);
+        }
     }
+    if (sbat.n) flush_sections(ts, &sbat, &P, bg, dst, bb);
 }
 
 /* A voxel on the voxel-at-a-time path, placed in the tile's buffer: what
