@@ -145,20 +145,55 @@ void vs_expand_brick(tile_state *ts, uint32_t b, int opening)
     }
 }
 
-/* Sections of one sheet waiting to be placed together: perspective sheets
- * whose footprints are a column times a row weight (raster_unskewed's
- * case) get their placement and factors from place_voxels, 16 sections a
- * call, and are added in the order they came, as raster_unskewed adds
- * them, to the same floats. */
+/* Sections waiting to be placed together: where every section of a frame
+ * (sheared_blocks) or of a sheet (perspective) comes from the same tables
+ * and takes the fused kernels (raster_unskewed's case, not post-gs),
+ * place_voxels places 16 at a time with their column and row factors, and
+ * they are added in the order they came, as raster_unskewed adds them, to
+ * the same floats. */
 typedef struct section_batch {
     int n;
     float xyz[3 * VS_PLACE_BATCH]; /* the sections' centres */
-    float D[VS_PLACE_BATCH];
-    const float *w[VS_PLACE_BATCH];
+    float w[VS_PLACE_BATCH][4];    /* weights times the depth integral */
+    float *dst[VS_PLACE_BATCH];    /* sheet buffer and its touched box */
+    rect *bb[VS_PLACE_BATCH];
 } section_batch;
 
-static void flush_sections(tile_state *ts, section_batch *sb, const vs_place_in *P, const vs_block_geom *g,
-                           float *dst, rect *bb)
+/* The placement input for a batch from tables g: no occlusion test (the
+ * voxel's own stays), the depth integrals not read (make_section's). */
+static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g, int opening)
+{
+    const vs_footprint *fp = &t->F->fp;
+    vs_place_in P;
+    memset(&P, 0, sizeof P);
+    P.rx0 = g->rx0;
+    P.ry0 = g->ry0;
+    P.phases = (float)VS_BLOCK_PHASES;
+    P.ox = t->ox;
+    P.oy = t->oy;
+    P.slab = (float)fp->slab;
+    P.rz = (float)fp->rz;
+    P.sd = fp->slab_d;
+    P.sscale = fp->slab_scale;
+    P.sn = fp->slab_n;
+    P.sw = fp->slab_w;
+    P.opening = opening;
+    P.nd = 1;
+    P.colw = g->colw;
+    P.roww = g->roww;
+    P.bx = g->bx;
+    P.ny = g->ny;
+    return P;
+}
+
+/* Can sections from tables g go through a batch? */
+static int sections_batched(const vs_frame *F, const vs_block_geom *g)
+{
+    return g && F->fp.row_shift == 0.0f && !F->stages->gradient_splats && g->bx <= VS_VOXEL1_MAX &&
+           g->ny <= VS_VOXEL1_MAX && F->fp.slab_d;
+}
+
+static void flush_sections(tile_state *ts, section_batch *sb, const vs_place_in *P, const vs_block_geom *g)
 {
     const tile_ctx *t = ts->t;
     const vs_frame *F = t->F;
@@ -174,19 +209,32 @@ static void flush_sections(tile_state *ts, section_batch *sb, const vs_place_in 
         if (v1 > nvec) v1 = nvec;
         const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
         if (j0 >= j1 || v0 >= v1) continue;
-        float *d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
+        float *d = sb->dst[l] + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
         const float *cw = pv.cw[l] + v0 * ppv, *rw = pv.rw[l] + j0;
-        float w[4];
-        for (int c = 0; c < ch; c++) w[c] = sb->w[l][c] * sb->D[l];
         if (ch == 1)
-            F->kern.splat_voxel1(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+            F->kern.splat_voxel1(&d, sb->w[l], 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
         else
-            F->kern.splat_voxel4(&d, w, 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
+            F->kern.splat_voxel4(&d, sb->w[l], 1, ds, cw, rw, j1 - j0, v1 - v0, g->thr);
         const rect box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1};
-        rect_merge(bb, &box);
+        rect_merge(sb->bb[l], &box);
         ts->ws->floats += 8 * (uint64_t)(j1 - j0) * (uint64_t)(v1 - v0);
     }
     sb->n = 0;
+}
+
+/* Queue a section (flushing a full batch first). */
+static inline void queue_section(tile_state *ts, section_batch *sb, const vs_place_in *P, const vs_block_geom *g,
+                                 const section *sec, const float *w4, float *dst, rect *bb)
+{
+    if (sb->n == VS_PLACE_BATCH) flush_sections(ts, sb, P, g);
+    const int n = sb->n++, ch = ts->t->F->stages->ch;
+    float *c = sb->xyz + 3 * n;
+    c[0] = sec->cx;
+    c[1] = sec->cy;
+    c[2] = P->slab * (float)P->opening + P->rz;
+    for (int i = 0; i < ch; i++) sb->w[n][i] = w4[i] * sec->D;
+    sb->dst[n] = dst;
+    sb->bb[n] = bb;
 }
 
 /* Sheet at a time (general footprints): rasterize sheet k into `dst` from
@@ -235,36 +283,13 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
             voxel_box(F, e->x, e->y, e->z, ts->abox[ts->nactive], &ts->abox[ts->nactive][4]);
         ts->active[ts->nactive++] = &bk->p[i];
     }
-    /* perspective sheets whose sections take the fused kernels
-     * (vs_raster_skewed's raster_unskewed case) place them in batches */
+    /* perspective sheets whose sections take the fused kernels place
+     * them in batches */
     const vs_block_geom *bg = sh.g;
-    const int batched = persp && bg && t->fp->row_shift == 0.0f && !F->stages->gradient_splats &&
-                        bg->bx <= VS_VOXEL1_MAX && bg->ny <= VS_VOXEL1_MAX && F->fp.slab_d;
+    const int batched = persp && sections_batched(F, bg);
     section_batch sbat;
     sbat.n = 0;
-    vs_place_in P;
-    memset(&P, 0, sizeof P);
-    if (batched) {
-        /* no occlusion test (the voxel's own, below) and depth integrals
-         * not read (make_section's): one slab of the frame's tables */
-        P.rx0 = bg->rx0;
-        P.ry0 = bg->ry0;
-        P.phases = (float)VS_BLOCK_PHASES;
-        P.ox = t->ox;
-        P.oy = t->oy;
-        P.slab = (float)F->fp.slab;
-        P.rz = (float)F->fp.rz;
-        P.sd = F->fp.slab_d;
-        P.sscale = F->fp.slab_scale;
-        P.sn = F->fp.slab_n;
-        P.sw = F->fp.slab_w;
-        P.opening = k;
-        P.nd = 1;
-        P.colw = bg->colw;
-        P.roww = bg->roww;
-        P.bx = bg->bx;
-        P.ny = bg->ny;
-    }
+    const vs_place_in P = batched ? section_place_in(t, bg, k) : (vs_place_in){0};
     for (int a = 0; a < ts->nactive; a++) {
         pend *e = ts->active[a];
         if (F->s->occlusion && *ts->opaque > 0) {
@@ -284,20 +309,14 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
         if (!make_section(t, &sh, e->x, e->y, e->z, k, &sec)) continue;
         ts->ws->splatted++;
         if (batched) {
-            float *c = sbat.xyz + 3 * sbat.n;
-            c[0] = sec.cx;
-            c[1] = sec.cy;
-            c[2] = P.slab * (float)k + P.rz;
-            sbat.D[sbat.n] = sec.D;
-            sbat.w[sbat.n++] = e->w;
-            if (sbat.n == VS_PLACE_BATCH) flush_sections(ts, &sbat, &P, bg, dst, bb);
+            queue_section(ts, &sbat, &P, bg, &sec, e->w, dst, bb);
         } else if (sec.g) {
             vs_raster_skewed(t, &sec, e->w, F->stages->ch, dst, bb, NULL);
         } else {
             F->stages->raster(t, &sec, e->w, dst, bb);
         }
     }
-    if (sbat.n) flush_sections(ts, &sbat, &P, bg, dst, bb);
+    if (sbat.n) flush_sections(ts, &sbat, &P, bg);
 }
 
 /* A voxel on the voxel-at-a-time path, placed in the tile's buffer: what
@@ -494,6 +513,11 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                            .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
     const sheet_geom unscaled = {g, 1.0f, 1.0f}; /* sheared_blocks: orthographic sections */
+    /* sheared_blocks sections through the fused kernels: placed in batches */
+    const int batched = F->sheared_blocks && sections_batched(F, g);
+    const vs_place_in Ps = batched ? section_place_in(t, g, opening) : (vs_place_in){0};
+    section_batch sbat;
+    sbat.n = 0;
     rect last[VS_MAX_VSPAN]; /* voxel_job last */
     for (int j = 0; j < P.nd; j++) rect_clear(&last[j]);
     vs_placed pv;
@@ -532,7 +556,10 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                     if (!make_section(t, &unscaled, e->x, e->y, e->z, k, &sec)) continue;
                     n_splatted++;
                     const int slot = slots[k - opening];
-                    vs_raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot], &uc);
+                    if (batched)
+                        queue_section(ts, &sbat, &Ps, g, &sec, w4, ring[slot], &bbs[slot]);
+                    else
+                        vs_raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot], &uc);
                 }
                 continue;
             }
@@ -584,6 +611,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
             }
         }
     }
+    if (sbat.n) flush_sections(ts, &sbat, &Ps, g);
     /* sheet opening + j is touched by the voxels whose last sheet is j or later */
     rect grow;
     rect_clear(&grow);
