@@ -500,6 +500,9 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
     const int nd = F->fp.vspan; /* sheets one kernel can reach */
     /* the voxel kernels' factors, for blocks they take whole */
     const float *colw = !F->sheared_blocks && g->bx <= VS_VOXEL1_MAX && g->ny <= VS_VOXEL1_MAX ? g->colw : NULL;
+    /* sheared_blocks sections through the fused kernels: placed in batches,
+     * their D and E from the voxel's row of the slab tables */
+    const int batched = F->sheared_blocks && sections_batched(F, g);
     const vs_place_in P = {.sat = F->s->occlusion && *ts->opaque > 0 ? ts->sat : NULL,
                            .tx0 = t->x0, .ty0 = t->y0, .tw = t->tw, .th = t->th,
                            .pad_x = (float)F->pad_x, .pad_y = (float)F->pad_y,
@@ -508,13 +511,11 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                            .sd = F->fp.slab_d, .se = F->fp.slab_e, .sscale = F->fp.slab_scale,
                            .sn = F->fp.slab_n, .sw = F->fp.slab_w,
                            /* E: post-gs voxels (sheared_blocks sections make their own) */
-                           .with_e = st->gradient_splats && !F->sheared_blocks,
+                           .with_e = (st->gradient_splats && !F->sheared_blocks) || batched,
                            .opening = opening, .nd = nd < VS_MAX_VSPAN ? nd : VS_MAX_VSPAN,
                            .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
     const sheet_geom unscaled = {g, 1.0f, 1.0f}; /* sheared_blocks: orthographic sections */
-    /* sheared_blocks sections through the fused kernels: placed in batches */
-    const int batched = F->sheared_blocks && sections_batched(F, g);
     const vs_place_in Ps = batched ? section_place_in(t, g, opening) : (vs_place_in){0};
     section_batch sbat;
     sbat.n = 0;
@@ -553,7 +554,15 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                 uc.g = NULL;
                 for (int k = opening; k <= kl; k++) {
                     section sec;
-                    if (!make_section(t, &unscaled, e->x, e->y, e->z, k, &sec)) continue;
+                    if (batched) {
+                        const float D = pv.D[lane][k - opening];
+                        if (!(D > 0.0f)) continue;
+                        float z0, c0, c1;
+                        section_ends(&F->fp, e->z, k, &z0, &c0, &c1);
+                        place_section(t, &unscaled, e->x, e->y, D, pv.E[lane][k - opening], c0, c1, &sec);
+                    } else if (!make_section(t, &unscaled, e->x, e->y, e->z, k, &sec)) {
+                        continue;
+                    }
                     n_splatted++;
                     const int slot = slots[k - opening];
                     if (batched)

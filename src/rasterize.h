@@ -21,33 +21,19 @@ typedef struct sheet_geom {
 /* The tables and scale of sheet k's sections. */
 sheet_geom vs_sheet_geom(const vs_frame *F, int k);
 
-/* Compute the slab section of voxel at depth z for sheet k; 0 if empty.
- * (x, y) is the voxel's image position, with perspective its depth-0 one:
- * the section on sheet k's plane is centred on the same world point, which
+/* The slab section of a voxel on a sheet from its depth integrals D and E
+ * over the slab (E: of the depth derivative, exp at the slab's ends;
+ * c0 <= c1: the slab's ends from the voxel's centre, clamped to the
+ * kernel's depth radius, for a sheared footprint's centroid).  (x, y) is
+ * the voxel's image position, with perspective its depth-0 one: the
+ * section on the sheet's plane is centred on the same world point, which
  * appears scaled by the sheet's scale about the image centre. */
-static inline int make_section(const tile_ctx *t, const sheet_geom *sh, float x, float y, float z, int k,
-                               section *sec)
+static inline void place_section(const tile_ctx *t, const sheet_geom *sh, float x, float y, float D, float E,
+                                 float c0, float c1, section *sec)
 {
     const vs_footprint *fp = t->fp;
-    float slab = (float)fp->slab;
-    float z0 = (float)k * slab - z, z1 = z0 + slab;
-    float D = vs_fp_depth(fp, z1) - vs_fp_depth(fp, z0);
-    if (!(D > 0.0f)) return 0;
-    float rz = (float)fp->rz;
-    float c0 = z0 < -rz ? -rz : (z0 > rz ? rz : z0);
-    float c1 = z1 < -rz ? -rz : (z1 > rz ? rz : z1);
-    float kap = (float)fp->kappa;
-    float e0 = 0.0f, e1 = 0.0f;
-    /* the depth derivative's integral: for gradient splats and the
-     * centroid of a sheared footprint only */
-    if (fp->sheared || t->F->stages->gradient_splats) {
-        e0 = vs_fp_exp(fp, kap * c0 * c0);
-        e1 = vs_fp_exp(fp, kap * c1 * c1);
-        if (fabsf(c0) >= rz) e0 = 0.0f;
-        if (fabsf(c1) >= rz) e1 = 0.0f;
-    }
     sec->D = D;
-    sec->E = e1 - e0;
+    sec->E = E;
     sec->cx = x;
     sec->cy = y;
     sec->sc = sh->sk;
@@ -59,8 +45,8 @@ static inline int make_section(const tile_ctx *t, const sheet_geom *sh, float x,
         sec->cy = cy + (y - cy) * sh->sk;
     }
     if (fp->sheared) { /* centroid of the depth term within the slab */
-        float zbar = (e0 - e1) / (2.0f * kap * D);
-        /* a centroid lies inside its slab; in a kernel's tail D and e0 - e1
+        float zbar = -E / (2.0f * (float)fp->kappa * D);
+        /* a centroid lies inside its slab; in a kernel's tail D and -E
          * are both tiny and their tabulated ratio can run away, which would
          * throw the footprint outside the tiles it was binned to */
         if (!(zbar >= c0)) zbar = c0;
@@ -68,6 +54,39 @@ static inline int make_section(const tile_ctx *t, const sheet_geom *sh, float x,
         sec->cx += fp->sx * zbar * sec->sc;
         sec->cy += fp->sy * zbar * sec->sc;
     }
+}
+
+/* The slab's ends from a voxel's centre at depth z, sheet k, clamped to
+ * the kernel's depth radius. */
+static inline void section_ends(const vs_footprint *fp, float z, int k, float *z0, float *c0, float *c1)
+{
+    const float slab = (float)fp->slab, rz = (float)fp->rz;
+    const float a = (float)k * slab - z, b = a + slab;
+    *z0 = a;
+    *c0 = a < -rz ? -rz : (a > rz ? rz : a);
+    *c1 = b < -rz ? -rz : (b > rz ? rz : b);
+}
+
+/* Compute the slab section of voxel at depth z for sheet k; 0 if empty. */
+static inline int make_section(const tile_ctx *t, const sheet_geom *sh, float x, float y, float z, int k,
+                               section *sec)
+{
+    const vs_footprint *fp = t->fp;
+    float z0, c0, c1;
+    section_ends(fp, z, k, &z0, &c0, &c1);
+    float D = vs_fp_depth(fp, z0 + (float)fp->slab) - vs_fp_depth(fp, z0);
+    if (!(D > 0.0f)) return 0;
+    float rz = (float)fp->rz, kap = (float)fp->kappa;
+    float e0 = 0.0f, e1 = 0.0f;
+    /* the depth derivative's integral: for gradient splats and the
+     * centroid of a sheared footprint only */
+    if (fp->sheared || t->F->stages->gradient_splats) {
+        e0 = vs_fp_exp(fp, kap * c0 * c0);
+        e1 = vs_fp_exp(fp, kap * c1 * c1);
+        if (fabsf(c0) >= rz) e0 = 0.0f;
+        if (fabsf(c1) >= rz) e1 = 0.0f;
+    }
+    place_section(t, sh, x, y, D, e1 - e0, c0, c1, sec);
     return 1;
 }
 
