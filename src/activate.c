@@ -160,7 +160,11 @@ typedef struct section_batch {
 } section_batch;
 
 /* The placement input for a batch from tables g: no occlusion test (the
- * voxel's own stays), the depth integrals not read (make_section's). */
+ * voxel's own stays) and no depth integrals (the sections have theirs):
+ * a slab table of two rows of zeros stands in for the frame's, which only
+ * the voxel-at-a-time paths make. */
+static const float no_slab_rows[2 * 8];
+
 static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g, int opening)
 {
     const vs_footprint *fp = &t->F->fp;
@@ -173,10 +177,10 @@ static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g, i
     P.oy = t->oy;
     P.slab = (float)fp->slab;
     P.rz = (float)fp->rz;
-    P.sd = fp->slab_d;
-    P.sscale = fp->slab_scale;
-    P.sn = fp->slab_n;
-    P.sw = fp->slab_w;
+    P.sd = no_slab_rows;
+    P.sscale = 1.0f;
+    P.sn = 1;
+    P.sw = 8;
     P.opening = opening;
     P.nd = 1;
     P.colw = g->colw;
@@ -190,7 +194,7 @@ static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g, i
 static int sections_batched(const vs_frame *F, const vs_block_geom *g)
 {
     return g && F->fp.row_shift == 0.0f && !F->stages->gradient_splats && g->bx <= VS_VOXEL1_MAX &&
-           g->ny <= VS_VOXEL1_MAX && F->fp.slab_d;
+           g->ny <= VS_VOXEL1_MAX;
 }
 
 static void flush_sections(tile_state *ts, section_batch *sb, const vs_place_in *P, const vs_block_geom *g)

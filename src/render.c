@@ -315,9 +315,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
             F.sheared_blocks = F.use_skewed && F.fp.sheared && F.fp.B == 0.0f && vspan <= VS_MAX_VSPAN;
             F.use_blocks = F.sheared_blocks;
         }
-        /* place_voxels' tables: also read (not used) by perspective
-         * sheets that place their sections in batches */
-        if ((F.use_blocks || F.cam.persp) && (rc = vs_footprint_slab_tables(ctx, s, &F.fp)) != VS_OK) goto fail;
+        if (F.use_blocks && (rc = vs_footprint_slab_tables(ctx, s, &F.fp)) != VS_OK) goto fail;
     }
     if (!s->exact_normals) {
         /* the context's tables (kept across frames); the frame reads a copy
