@@ -7,6 +7,7 @@
 #include "tile.h"
 #include "testutil.h"
 
+#include <stdint.h>
 #include <string.h>
 
 static unsigned rng = 12345u;
@@ -16,15 +17,31 @@ static unsigned next(void)
     return rng >> 8;
 }
 
-/* is each array of a also in b? */
-static int all_in(const vs_spares *a, const vs_spares *b)
+/* The pool's arrays as addresses and sizes: an array the pool frees may
+ * not be compared as a pointer afterwards, its address as a number may. */
+typedef struct snapshot {
+    int n;
+    uintptr_t p[VS_SPARES];
+    int cap[VS_SPARES];
+} snapshot;
+
+static snapshot take(const vs_spares *s)
 {
-    for (int i = 0; i < a->n; i++) {
-        int found = 0;
-        for (int j = 0; j < b->n && !found; j++) found = a->p[i] == b->p[j] && a->cap[i] == b->cap[j];
-        if (!found) return 0;
+    snapshot z;
+    z.n = s->n;
+    for (int i = 0; i < s->n; i++) {
+        z.p[i] = (uintptr_t)s->p[i];
+        z.cap[i] = s->cap[i];
     }
-    return 1;
+    return z;
+}
+
+/* index of the array at address a with cap entries in z, or -1 */
+static int find(const snapshot *z, uintptr_t a, int cap)
+{
+    for (int j = 0; j < z->n; j++)
+        if (z->p[j] == a && z->cap[j] == cap) return j;
+    return -1;
 }
 
 static void check_one(vs_spares *s, int cap, int *kept, int *refused)
@@ -34,28 +51,27 @@ static void check_one(vs_spares *s, int cap, int *kept, int *refused)
         CHECK(0, "out of memory for a test array of %d voxels", cap);
         return;
     }
-    const vs_spares before = *s;
+    const uintptr_t pa = (uintptr_t)p;
+    const snapshot before = take(s);
     vs_keep_spare(s, p, cap);
+    const snapshot after = take(s);
     size_t bytes = 0;
-    int in = 0;
-    for (int i = 0; i < s->n; i++) {
-        bytes += (size_t)s->cap[i] * sizeof(pend);
-        in |= s->p[i] == p;
-    }
+    for (int i = 0; i < s->n; i++) bytes += (size_t)s->cap[i] * sizeof(pend);
+    const int in = find(&after, pa, cap) >= 0;
     CHECK(s->n <= VS_SPARES, "%d arrays kept, at most %d allowed", s->n, VS_SPARES);
     CHECK(bytes == s->bytes, "pool counts %zu bytes, holds %zu", s->bytes, bytes);
     CHECK(s->bytes <= VS_SPARE_BYTES, "pool holds %zu bytes, at most %d allowed", s->bytes, VS_SPARE_BYTES);
     if (in) {
         ++*kept;
         /* whatever went was smaller than what came */
-        for (int i = 0; i < before.n; i++) {
-            int still = 0;
-            for (int j = 0; j < s->n && !still; j++) still = before.p[i] == s->p[j];
-            CHECK(still || before.cap[i] < cap, "an array of %d gave way to one of %d", before.cap[i], cap);
-        }
+        for (int i = 0; i < before.n; i++)
+            CHECK(find(&after, before.p[i], before.cap[i]) >= 0 || before.cap[i] < cap,
+                  "an array of %d gave way to one of %d", before.cap[i], cap);
     } else {
         ++*refused;
-        CHECK(s->n == before.n && all_in(&before, s), "an array of %d refused, yet the pool changed", cap);
+        int same = after.n == before.n;
+        for (int i = 0; same && i < before.n; i++) same = find(&after, before.p[i], before.cap[i]) >= 0;
+        CHECK(same, "an array of %d refused, yet the pool changed", cap);
     }
 }
 
