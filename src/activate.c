@@ -208,10 +208,9 @@ static void flush_sections(tile_state *ts, section_batch *sb, const vs_place_in 
     F->kern.place_voxels(sb->xyz, 3, sb->n, P, &pv);
     for (int l = 0; l < sb->n; l++) {
         const int bx = pv.bx[l], by = pv.by[l];
-        const int v0 = bx < 0 ? -bx / ppv : 0;
-        int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
-        if (v1 > nvec) v1 = nvec;
-        const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+        int v0, v1, j0, j1;
+        vs_clip_cols(t, bx, nvec, ppv, &v0, &v1);
+        vs_clip_rows(t, by, g->ny, &j0, &j1);
         if (j0 >= j1 || v0 >= v1) continue;
         float *d = sb->dst[l] + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
         const float *cw = pv.cw[l] + v0 * ppv, *rw = pv.rw[l] + j0;
@@ -578,10 +577,9 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
             }
             /* rows [j0, j1) and vectors [v0, v1) of the block inside the buffer */
             const int by = pv.by[lane], bx = pv.bx[lane];
-            const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
-            const int v0 = bx < 0 ? -bx / ppv : 0;
-            int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
-            if (v1 > g->nvec) v1 = g->nvec;
+            int j0, j1, v0, v1;
+            vs_clip_rows(t, by, g->ny, &j0, &j1);
+            vs_clip_cols(t, bx, g->nvec, ppv, &v0, &v1);
             if (j0 >= j1 || v0 >= v1) continue;
             /* the factor paths read only the phase rows and weights; the
              * gradient layout and the block fallback set the phases too */

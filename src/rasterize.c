@@ -104,9 +104,7 @@ static int unskewed_place_cols(const tile_ctx *t, const vs_block_geom *g, const 
     const int ppv = 8 / ch, nvec = (g->nx * ch + 7) / 8;
     const int bx = p->x - t->ox;
     uc->bx = bx;
-    uc->v0 = bx < 0 ? -bx / ppv : 0;
-    uc->v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
-    if (uc->v1 > nvec) uc->v1 = nvec;
+    vs_clip_cols(t, bx, nvec, ppv, &uc->v0, &uc->v1);
     if (uc->v0 >= uc->v1) return 1;
     if ((uc->v1 - uc->v0) * ppv > VS_VOXEL1_MAX) return 0;
     const int n = (uc->v1 - uc->v0) * ppv;
@@ -145,7 +143,8 @@ static void unskewed_splat_rows(const tile_ctx *t, const vs_block_geom *g, const
     const vs_frame *F = t->F;
     const int ppv = 8 / ch, v0 = uc->v0, v1 = uc->v1, bx = uc->bx;
     const int by = p->y - t->oy;
-    const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
+    int j0, j1;
+    vs_clip_rows(t, by, g->ny, &j0, &j1);
     if (j0 >= j1 || v0 >= v1) return;
     const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
     float *const d = dst + (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;
@@ -213,10 +212,9 @@ void vs_raster_skewed(const tile_ctx *t, const section *sec, const float w4[4], 
     int x, y, nvec;
     vs_block_build_skewed(g, t->fp->row_shift, sec->cx, sec->cy, ch, gs, F->skew_maxvec, t->blk, &x, &y, &nvec);
     const int by = y - t->oy, bx = x - t->ox;
-    const int j0 = by < 0 ? -by : 0, j1 = t->bh - by < g->ny ? t->bh - by : g->ny;
-    const int v0 = bx < 0 ? -bx / ppv : 0;
-    int v1 = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
-    if (v1 > nvec) v1 = nvec;
+    int j0, j1, v0, v1;
+    vs_clip_rows(t, by, g->ny, &j0, &j1);
+    vs_clip_cols(t, bx, nvec, ppv, &v0, &v1);
     if (j0 >= j1 || v0 >= v1) return;
     const ptrdiff_t ds = (ptrdiff_t)t->stride * ch;
     const ptrdiff_t off = (ptrdiff_t)(by + j0) * ds + (ptrdiff_t)(bx + v0 * ppv) * ch;

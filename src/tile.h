@@ -65,6 +65,22 @@ typedef struct tile_ctx {
     vs_worker_stats *ws; /* the worker's counters                            */
 } tile_ctx;
 
+/* The part of a footprint block inside the tile's buffer, block pixel
+ * (0, 0) at buffer column bx and row by: its vectors [v0, v1) of ppv
+ * pixels (of nvec; the last may spill into the apron) and its rows
+ * [j0, j1) (of ny).  Empty when v0 >= v1 or j0 >= j1. */
+static inline void vs_clip_cols(const tile_ctx *t, int bx, int nvec, int ppv, int *v0, int *v1)
+{
+    const int v = t->bw - bx <= 0 ? 0 : (t->bw - bx + ppv - 1) / ppv;
+    *v0 = bx < 0 ? -bx / ppv : 0;
+    *v1 = v < nvec ? v : nvec;
+}
+static inline void vs_clip_rows(const tile_ctx *t, int by, int ny, int *j0, int *j1)
+{
+    *j0 = by < 0 ? -by : 0;
+    *j1 = t->bh - by < ny ? t->bh - by : ny;
+}
+
 /* Own pixel (x, y) of the buffer's coordinates in the tile's per-pixel
  * arrays (opacity, colour, accumulated image). */
 static inline int vs_own(const tile_ctx *t, int x, int y) { return (y - t->seam) * t->tw + (x - t->seam); }
