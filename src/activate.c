@@ -165,9 +165,8 @@ typedef struct section_batch {
  * the voxel-at-a-time paths make. */
 static const float no_slab_rows[2 * 8];
 
-static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g, int opening)
+static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g)
 {
-    const vs_footprint *fp = &t->F->fp;
     vs_place_in P;
     memset(&P, 0, sizeof P);
     P.rx0 = g->rx0;
@@ -175,13 +174,10 @@ static vs_place_in section_place_in(const tile_ctx *t, const vs_block_geom *g, i
     P.phases = (float)VS_BLOCK_PHASES;
     P.ox = t->ox;
     P.oy = t->oy;
-    P.slab = (float)fp->slab;
-    P.rz = (float)fp->rz;
     P.sd = no_slab_rows;
     P.sscale = 1.0f;
     P.sn = 1;
     P.sw = 8;
-    P.opening = opening;
     P.nd = 1;
     P.colw = g->colw;
     P.roww = g->roww;
@@ -234,7 +230,7 @@ static inline void queue_section(tile_state *ts, section_batch *sb, const vs_pla
     float *c = sb->xyz + 3 * n;
     c[0] = sec->cx;
     c[1] = sec->cy;
-    c[2] = P->slab * (float)P->opening + P->rz;
+    c[2] = 0.0f; /* any depth: the stand-in slab table's rows are alike */
     for (int i = 0; i < ch; i++) sb->w[n][i] = w4[i] * sec->D;
     sb->dst[n] = dst;
     sb->bb[n] = bb;
@@ -292,7 +288,7 @@ void vs_rasterize_sheet(tile_state *ts, int k, float *dst, rect *bb)
     const int batched = persp && sections_batched(F, bg);
     section_batch sbat;
     sbat.n = 0;
-    const vs_place_in P = batched ? section_place_in(t, bg, k) : (vs_place_in){0};
+    const vs_place_in P = batched ? section_place_in(t, bg) : (vs_place_in){0};
     for (int a = 0; a < ts->nactive; a++) {
         pend *e = ts->active[a];
         if (F->s->occlusion && *ts->opaque > 0) {
@@ -519,7 +515,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                            .colw = colw,
                            .roww = g->roww, .bx = g->bx, .ny = g->ny};
     const sheet_geom unscaled = {g, 1.0f, 1.0f}; /* sheared_blocks: orthographic sections */
-    const vs_place_in Ps = batched ? section_place_in(t, g, opening) : (vs_place_in){0};
+    const vs_place_in Ps = batched ? section_place_in(t, g) : (vs_place_in){0};
     section_batch sbat;
     sbat.n = 0;
     rect last[VS_MAX_VSPAN]; /* voxel_job last */
@@ -560,8 +556,8 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                     if (batched) {
                         const float D = pv.D[lane][k - opening];
                         if (!(D > 0.0f)) continue;
-                        float z0, c0, c1;
-                        section_ends(&F->fp, e->z, k, &z0, &c0, &c1);
+                        float c0, c1;
+                        section_ends(&F->fp, e->z, k, &c0, &c1);
                         place_section(t, &unscaled, e->x, e->y, D, pv.E[lane][k - opening], c0, c1, &sec);
                     } else if (!make_section(t, &unscaled, e->x, e->y, e->z, k, &sec)) {
                         continue;

@@ -57,14 +57,14 @@ static inline void place_section(const tile_ctx *t, const sheet_geom *sh, float 
 }
 
 /* The slab's ends from a voxel's centre at depth z, sheet k, clamped to
- * the kernel's depth radius. */
-static inline void section_ends(const vs_footprint *fp, float z, int k, float *z0, float *c0, float *c1)
+ * the kernel's depth radius (c0, c1); returns the near end unclamped. */
+static inline float section_ends(const vs_footprint *fp, float z, int k, float *c0, float *c1)
 {
     const float slab = (float)fp->slab, rz = (float)fp->rz;
     const float a = (float)k * slab - z, b = a + slab;
-    *z0 = a;
     *c0 = a < -rz ? -rz : (a > rz ? rz : a);
     *c1 = b < -rz ? -rz : (b > rz ? rz : b);
+    return a;
 }
 
 /* Compute the slab section of voxel at depth z for sheet k; 0 if empty. */
@@ -72,8 +72,8 @@ static inline int make_section(const tile_ctx *t, const sheet_geom *sh, float x,
                                section *sec)
 {
     const vs_footprint *fp = t->fp;
-    float z0, c0, c1;
-    section_ends(fp, z, k, &z0, &c0, &c1);
+    float c0, c1;
+    const float z0 = section_ends(fp, z, k, &c0, &c1);
     float D = vs_fp_depth(fp, z0 + (float)fp->slab) - vs_fp_depth(fp, z0);
     if (!(D > 0.0f)) return 0;
     float rz = (float)fp->rz, kap = (float)fp->kappa;
