@@ -14,12 +14,13 @@
  * gradient alone there measured 2.6 dB worse for post-cd, 4.5 post-gs, on
  * the translucent head at 30 degrees).
  *
- * The live pixels of a span are gathered into batches: table look-ups and
- * the gradients per pixel, then their Phong terms through the normal LUT
- * in one SIMD call (kernels.h shade_terms), then the mix.  Sheet k's terms
- * are those shading sheet k - 1 took for its k + 1, where that pixel was
- * live there (97 % of them on the translucent head), so most pixels light
- * two gradients, not three.  (The middle's terms cannot be the mean of the
+ * A row is taken up to 64 pixels at a time: the live ones are listed, their
+ * middle's and sheet k + 1's gradients lit together through the normal
+ * LUT in one SIMD call (kernels.h shade_terms), then each pixel's table
+ * look-ups and mix.  Sheet k's terms are those shading sheet k - 1 took
+ * for its k + 1, where that pixel was live there (97 % of them on the
+ * translucent head; the others' are lit in a second call), so most pixels
+ * light two gradients, not three.  (The middle's terms cannot be the mean of the
  * ends': 2.7 dB worse for post-cd on the translucent head, 2.3 post-gs.) */
 #include "shade.h"
 #include "preintegrate.h"
@@ -31,43 +32,41 @@
 #include <emmintrin.h>
 #endif
 
-enum { BATCH = 64 };
-
-typedef struct batch {
-    int n, ng;
-    int o[BATCH];              /* pixel in the tile's shade buffers          */
-    float e[BATCH][8];         /* front half, back half: opacity, r g b      */
-    /* the gradients to light (at sheet k, the middle, sheet k + 1; sheet
-     * k's is left out where sheet k - 1 lit it as its k + 1), and for each
-     * the slot of its terms in d, s (pixel j's at 3 j .. 3 j + 2) */
-    float g[3 * BATCH * 3];
-    int slot[BATCH * 3];
-    float gd[BATCH * 3], gsp[BATCH * 3];
-    float d[BATCH * 3], s[BATCH * 3];
-} batch;
-
-/* The exact-normals path: the light model on each gradient (as shade.c's
- * shade_gradient: view space to the eye frame per mm, in float). */
-static void terms_exact(const vs_frame *F, batch *B)
+/* Phong terms d, s of n gradients g (3 floats each): the normal LUT by
+ * the kernels, or the exact light model (as shade.c's shade_gradient:
+ * view space to the eye frame per mm, in float) */
+static void light_terms(const vs_frame *F, const sheet_view *sv, float *d, float *s, const float *g, int n)
 {
-    const float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
-    for (int i = 0; i < B->ng; i++) {
-        const float *g = B->g + 3 * i;
-        double n[3] = {g[0] * ppm, g[1] * ppm, g[2] * zpm}, dd, ss;
-        vs_light_eval(&F->light, n, &dd, &ss);
-        B->gd[i] = (float)dd;
-        B->gsp[i] = (float)ss;
+    if (!n) return;
+    if (!F->s->exact_normals) {
+        F->kern.shade_terms(d, s, g, n, sv->tabs);
+        return;
     }
+    const float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
+    for (int i = 0; i < n; i++) {
+        const float *gi = g + 3 * i;
+        double nv[3] = {gi[0] * ppm, gi[1] * ppm, gi[2] * zpm}, dd, ss;
+        vs_light_eval(&F->light, nv, &dd, &ss);
+        d[i] = (float)dd;
+        s[i] = (float)ss;
+    }
+}
+
+/* 1 over the joint opacity of two halves (0 where it emits nothing: an
+ * opacity of 0, or under 1/FLT_MAX) */
+static inline float inv_opacity(float a1, float a2)
+{
+    const float A = vs_preint_over(a1, a2);
+    const float inv = A > 0.0f ? 1.0f / A : 0.0f;
+    return inv <= FLT_MAX ? inv : 0.0f;
 }
 
 /* A pixel's colour from its two halves e (front: opacity, premultiplied
  * r g b; back: the same), each lit by Phong terms d, s: the halves front
- * over back, over their joint opacity. */
-static inline void emit_halves(const float e[8], float d1, float s1, float d2, float s2, float c[3])
+ * over back, times inv = inv_opacity(e[0], e[4]). */
+static inline void emit_halves(const float e[8], float inv, float d1, float s1, float d2, float s2, float c[3])
 {
-    const float a1 = e[0], a2 = e[4], A = vs_preint_over(a1, a2);
-    float inv = A > 0.0f ? 1.0f / A : 0.0f;
-    if (!(inv <= FLT_MAX)) inv = 0.0f; /* an opacity under 1/FLT_MAX emits nothing */
+    const float a1 = e[0], a2 = e[4];
 #if defined(__SSE2__)
     /* the same operations, a lane a channel (lane 0, the opacity's, unused) */
     const __m128 f = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(e), _mm_set1_ps(d1)), _mm_set1_ps(a1 * s1));
@@ -84,45 +83,15 @@ static inline void emit_halves(const float e[8], float d1, float s1, float d2, f
 /* Each half lit by the mean of the terms at its ends: the front half by
  * sheet k's (d[0], s[0]) and the middle's (d[1], s[1]), the back half by
  * the middle's and sheet k + 1's (d[2], s[2]). */
-static inline void emit_mixed(const float e[8], const float d[3], const float s[3], float c[3])
+static inline void emit_mixed(const float e[8], float inv, const float d[3], const float s[3], float c[3])
 {
-    emit_halves(e, 0.5f * (d[0] + d[1]), 0.5f * (s[0] + s[1]), 0.5f * (d[1] + d[2]), 0.5f * (s[1] + s[2]), c);
-}
-
-/* a gradient to light, its terms going to slot */
-static inline float *push(batch *B, int slot)
-{
-    B->slot[B->ng] = slot;
-    return B->g + 3 * B->ng++;
-}
-
-static void flush(const vs_frame *F, const sheet_view *sv, batch *B, shade_buf sb)
-{
-    if (!B->n) return;
-    if (F->s->exact_normals)
-        terms_exact(F, B);
-    else
-        F->kern.shade_terms(B->gd, B->gsp, B->g, B->ng, sv->tabs);
-    for (int i = 0; i < B->ng; i++) {
-        B->d[B->slot[i]] = B->gd[i];
-        B->s[B->slot[i]] = B->gsp[i];
-    }
-    for (int j = 0; j < B->n; j++) {
-        const float *d = B->d + 3 * j, *sp = B->s + 3 * j;
-        const int o = B->o[j];
-        emit_mixed(B->e[j], d, sp, sb.g + 3 * o);
-        /* sheet k + 1's terms, for when it is shaded */
-        sb.term[2 * o] = d[2];
-        sb.term[2 * o + 1] = sp[2];
-        sb.term_k[o] = sv->k + 1;
-    }
-    B->n = B->ng = 0;
+    emit_halves(e, inv, 0.5f * (d[0] + d[1]), 0.5f * (s[0] + s[1]), 0.5f * (d[1] + d[2]), 0.5f * (s[1] + s[2]), c);
 }
 
 /* A row's pixels are taken CHUNK at a time: first, for all of them, the
  * values at the segment's ends and middle, their table cells and sheet
  * k + 1's gradient, in loops the compiler vectorises; then the live ones
- * go to the batch. */
+ * are listed and lit. */
 enum { CHUNK = 64 };
 
 /* vs_preint_cell of v[i] + base for a run of values: the same cells and
@@ -163,8 +132,6 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
     const float cz = persp ? (float)(cam->px_per_mm / (cam->focal_px * cam->z_per_mm)) : 0.0f;
     const float slab = (float)F->fp.slab, base = (float)F->base;
     const ptrdiff_t st = t->stride;
-    batch B;
-    B.n = B.ng = 0;
     for (int y = sp->y0; y < sp->y1; y++)
         for (int x0 = sp->xa[y]; x0 < sp->xb[y]; x0 += CHUNK) {
             const int n = sp->xb[y] - x0 < CHUNK ? sp->xb[y] - x0 : CHUNK;
@@ -213,23 +180,18 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             cells(T, base, vm, cm, fm, n);
             cells(T, base, vb, cb, fb, n);
             const float v = (float)((y + t->oy) - cam->cy);
+            /* the live pixels, in order */
+            int idx[CHUNK], nl = 0;
             for (int i = 0; i < n; i++) {
-                if (!(al[i] > 0.0f)) continue;
-                const int o = o0 + i, j = B.n;
-                const float *g0 = sb.g + 3 * o;
-                const vs_preint_at a1 = {(size_t)cf[i] * VS_PREINT_N + (size_t)cm[i], ff[i], fm[i]},
-                                   a2 = {(size_t)cm[i] * VS_PREINT_N + (size_t)cb[i], fm[i], fb[i]};
-                vs_preint_get4(P, &a1, B.e[j]);
-                vs_preint_get4(P, &a2, B.e[j] + 4);
-                /* sheet k's terms: taken when sheet k - 1 was shaded, or now */
-                if (sb.term_k[o] == sv->k) {
-                    B.d[3 * j] = sb.term[2 * o];
-                    B.s[3 * j] = sb.term[2 * o + 1];
-                } else {
-                    float *gk = push(&B, 3 * j);
-                    for (int c = 0; c < 3; c++) gk[c] = g0[c];
-                }
-                float *gm = push(&B, 3 * j + 1), *gn = push(&B, 3 * j + 2);
+                idx[nl] = i;
+                nl += al[i] > 0.0f;
+            }
+            /* their middle's and sheet k + 1's gradients, lit together */
+            float gl[2 * CHUNK * 3], dl[2 * CHUNK], sl[2 * CHUNK];
+            for (int j = 0; j < nl; j++) {
+                const int i = idx[j];
+                const float *g0 = sb.g + 3 * (o0 + i);
+                float *gm = gl + 6 * j, *gn = gm + 3;
                 for (int c = 0; c < 3; c++) gn[c] = g1[i][c];
                 const float u = persp ? (float)((x0 + i + t->ox) - cam->cx) : 0.0f;
                 if (persp) vs_perspective_gradient(gn, sk1, u, v, cz);
@@ -237,11 +199,41 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                 gm[1] = 0.5f * (g0[1] + gn[1]);
                 gm[2] = gs ? 0.5f * (g0[2] + gn[2]) : gmz[i];
                 if (persp) gm[2] -= (gm[0] * u + gm[1] * v) * cz; /* along view z, as the ends */
-                B.o[B.n++] = o;
-                if (B.n == BATCH) flush(F, sv, &B, sb);
+            }
+            light_terms(F, sv, dl, sl, gl, 2 * nl);
+            /* sheet k's terms: taken when sheet k - 1 was shaded, or now
+             * for the pixels (miss) that were not live there */
+            int miss[CHUNK], nm = 0;
+            float gk[CHUNK * 3], dk[CHUNK], sk[CHUNK];
+            for (int j = 0; j < nl; j++) {
+                const int o = o0 + idx[j];
+                if (sb.term_k[o] == sv->k) continue;
+                for (int c = 0; c < 3; c++) gk[3 * nm + c] = sb.g[3 * o + c];
+                miss[nm++] = j;
+            }
+            light_terms(F, sv, dk, sk, gk, nm);
+            for (int j = 0, mi = 0; j < nl; j++) {
+                const int i = idx[j], o = o0 + i;
+                const vs_preint_at a1 = {(size_t)cf[i] * VS_PREINT_N + (size_t)cm[i], ff[i], fm[i]},
+                                   a2 = {(size_t)cm[i] * VS_PREINT_N + (size_t)cb[i], fm[i], fb[i]};
+                float e[8];
+                vs_preint_get4(P, &a1, e);
+                vs_preint_get4(P, &a2, e + 4);
+                float d[3] = {0.0f, dl[2 * j], dl[2 * j + 1]}, sp3[3] = {0.0f, sl[2 * j], sl[2 * j + 1]};
+                if (mi < nm && miss[mi] == j) {
+                    d[0] = dk[mi];
+                    sp3[0] = sk[mi++];
+                } else {
+                    d[0] = sb.term[2 * o];
+                    sp3[0] = sb.term[2 * o + 1];
+                }
+                emit_mixed(e, inv_opacity(e[0], e[4]), d, sp3, sb.g + 3 * o);
+                /* sheet k + 1's terms, for when it is shaded */
+                sb.term[2 * o] = d[2];
+                sb.term[2 * o + 1] = sp3[2];
+                sb.term_k[o] = sv->k + 1;
             }
         }
-    flush(F, sv, &B, sb);
 }
 
 /* Post-alpha with pre-integration: the segment to the next sheet in two
@@ -267,6 +259,6 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
             vs_post_alpha_terms(q, d0, s0, &dk, &sk);
             vs_post_alpha_terms(qn, d0, s0, &dn, &sn);
             const float d[3] = {dk, 0.5f * (dk + dn), dn}, s[3] = {sk, 0.5f * (sk + sn), sn};
-            emit_mixed(e, d, s, sb.g + 3 * o);
+            emit_mixed(e, inv_opacity(e[0], e[4]), d, s, sb.g + 3 * o);
         }
 }
