@@ -328,8 +328,7 @@ typedef struct voxel_job {
     const float *D, *E;       /* depth integrals of its sheets opening + j     */
     float ex, ey;             /* its centre (image pixels)                      */
     int opening, kl;          /* its first and last sheet                       */
-    const int *slots;         /* ring slot of sheet opening + j                 */
-    float *const *ring;
+    float *const *sheet;      /* the buffer of sheet opening + j (its ring slot) */
     rect *last;               /* by a voxel's last sheet reached (j), the union
                                  of those voxels' boxes: each slot's touched box
                                  grows once a sheet, not once a section        */
@@ -356,7 +355,7 @@ static inline int reached_sheets(const voxel_job *j, int nc, float **dst, float 
     for (int i = 0; i <= j->kl - j->opening; i++) {
         const float Dk = j->D[i];
         if (!(Dk > 0.0f)) continue;
-        dst[ns] = j->ring[j->slots[i]] + j->off;
+        dst[ns] = j->sheet[i] + j->off;
         for (int c = 0; c < nc; c++) w[nc * ns + c] = j->wv[c] * Dk;
         ns++;
         last = i;
@@ -421,7 +420,7 @@ static inline int splat_gradient(const voxel_job *j)
         const int i = k - j->opening;
         const float Dk = j->D[i];
         if (!(Dk > 0.0f)) continue;
-        dst[ns] = j->ring[j->slots[i]] + j->off;
+        dst[ns] = j->sheet[i] + j->off;
         gradient_weights(wv, Dk, j->E[i], A, rk, &w[4 * ns]);
         ns++;
         last = i;
@@ -487,7 +486,11 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
     /* ring slots of the sheets from `opening` on: every voxel of this
      * bucket starts there (one division per sheet, not per section) */
     int slots[VS_MAX_VSPAN];
-    for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) slots[j] = (opening + j - kbase) % R;
+    float *sheet[VS_MAX_VSPAN];
+    for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) {
+        slots[j] = (opening + j - kbase) % R;
+        sheet[j] = ring[slots[j]];
+    }
     const char *vdata = F->vol->data;
     const size_t vsize = vs_type_size(F->vol->type);
     const size_t plane = (size_t)F->vol->dims[0] * (size_t)F->vol->dims[1], nvox = plane * (size_t)F->vol->dims[2];
@@ -583,7 +586,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                                   .fx = pv.fx[lane], .fy = pv.fy[lane]};
             const voxel_job job = {.t = t, .g = g, .wv = wvs[lane], .D = pv.D[lane], .E = pv.E[lane],
                                    .ex = e->x, .ey = e->y, .opening = opening, .kl = kl,
-                                   .slots = slots, .ring = ring, .last = last,
+                                   .sheet = sheet, .last = last,
                                    .box = {bx + v0 * ppv, by + j0, bx + v1 * ppv, by + j1},
                                    .off = (ptrdiff_t)(by + j0) * ((ptrdiff_t)t->stride * ch) +
                                           (ptrdiff_t)(bx + v0 * ppv) * ch,
