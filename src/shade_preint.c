@@ -20,8 +20,9 @@
  * look-ups and mix.  Sheet k's terms are those shading sheet k - 1 took
  * for its k + 1, where that pixel was live there (97 % of them on the
  * translucent head; the others' are lit in a second call), so most pixels
- * light two gradients, not three.  (The middle's terms cannot be the mean of the
- * ends': 2.7 dB worse for post-cd on the translucent head, 2.3 post-gs.) */
+ * light two gradients, not three.  (The middle's terms cannot be the mean
+ * of the ends': 2.7 dB worse for post-cd on the translucent head, 2.3
+ * post-gs.) */
 #include "shade.h"
 #include "preintegrate.h"
 #include "sheet_classify.h"
