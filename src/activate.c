@@ -483,8 +483,9 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
     /* ch (the stages' channels) is each instance's constant: every voxel's
      * block bounds are divided by 8 / ch, a shift rather than a division */
     const int ppv = 8 / ch, bs = 8 * g->nvec;
-    /* ring slots of the sheets from `opening` on: every voxel of this
-     * bucket starts there (one division per sheet, not per section) */
+    /* ring slots and buffers of the sheets from `opening` on: every voxel
+     * of this bucket starts there (one division per sheet, not per
+     * section) */
     int slots[VS_MAX_VSPAN];
     float *sheet[VS_MAX_VSPAN];
     for (int j = 0; j < VS_MAX_VSPAN && j < R; j++) {

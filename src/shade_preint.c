@@ -14,10 +14,10 @@
  * gradient alone there measured 2.6 dB worse for post-cd, 4.5 post-gs, on
  * the translucent head at 30 degrees).
  *
- * A row is taken up to 64 pixels at a time: the live ones are listed, their
- * middle's and sheet k + 1's gradients lit together through the normal
- * LUT in one SIMD call (kernels.h shade_terms), then each pixel's table
- * look-ups and mix.  Sheet k's terms are those shading sheet k - 1 took
+ * A row is taken CHUNK pixels at a time: the live ones are listed, their
+ * middle's and sheet k + 1's gradients lit together (one shade_terms call
+ * through the normal LUT, kernels.h, or the exact light model), then each
+ * pixel's table look-ups and mix.  Sheet k's terms are those shading sheet k - 1 took
  * for its k + 1, where that pixel was live there (97 % of them on the
  * translucent head; the others' are lit in a second call), so most pixels
  * light two gradients, not three.  (The middle's terms cannot be the mean
