@@ -4,30 +4,45 @@
  * radius) and added to every sheet; multiply then add as the scalar
  * reference (scalar.c; no FMA, kernels.h). */
 #include "kernels.h"
+#include "by_sheets.h"
 
 #include <immintrin.h>
 
-void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
-                          int rows, int nvec, float thr)
+/* The common case, an 8-pixel footprint of at most 8 rows: its rows are
+ * built once into registers, then added sheet by sheet (rows outer, as
+ * below, measured 8 % slower in the frame here).  Inlined with the row
+ * count constant, so that the rows stay in registers. */
+static inline __attribute__((always_inline)) void voxel1_narrow(float *const *dst, const float *w, int ns,
+                                                                 ptrdiff_t ds, const float *cw, const float *rw,
+                                                                 int rows, __m256 t)
+{
+    const __m256 c = _mm256_loadu_ps(cw);
+    __m256 h[8];
+    for (int r = 0; r < rows; r++) {
+        h[r] = _mm256_mul_ps(c, _mm256_set1_ps(rw[r]));
+        h[r] = _mm256_and_ps(h[r], _mm256_cmp_ps(h[r], t, _CMP_GT_OQ));
+    }
+    for (int s = 0; s < ns; s++) {
+        const __m256 ws = _mm256_set1_ps(w[s]);
+        float *d = dst[s];
+        for (int r = 0; r < rows; r++, d += ds)
+            _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(ws, h[r])));
+    }
+}
+
+static inline __attribute__((always_inline)) void voxel1_rows(float *const *dst, const float *w, int ns, ptrdiff_t ds,
+                                                               const float *cw, const float *rw, int rows, int nvec,
+                                                               float thr)
 {
     const __m256 t = _mm256_set1_ps(thr);
     if (nvec == 1 && rows <= 8) {
-        /* the common case, an 8-pixel footprint of at most 8 rows: its rows
-         * are built once into registers, then added sheet by sheet (rows
-         * outer, as below, measured 8 % slower in the frame here) */
-        const __m256 c = _mm256_loadu_ps(cw);
-        __m256 h[8];
-        for (int r = 0; r < rows; r++) {
-            h[r] = _mm256_mul_ps(c, _mm256_set1_ps(rw[r]));
-            h[r] = _mm256_and_ps(h[r], _mm256_cmp_ps(h[r], t, _CMP_GT_OQ));
+        switch (rows) {
+#define NARROW(R)                                                                                                      \
+    case R: voxel1_narrow(dst, w, ns, ds, cw, rw, R, t); return;
+            NARROW(1) NARROW(2) NARROW(3) NARROW(4) NARROW(5) NARROW(6) NARROW(7) NARROW(8)
+#undef NARROW
+        default: return; /* no rows */
         }
-        for (int s = 0; s < ns; s++) {
-            const __m256 ws = _mm256_set1_ps(w[s]);
-            float *d = dst[s];
-            for (int r = 0; r < rows; r++, d += ds)
-                _mm256_storeu_ps(d, _mm256_add_ps(_mm256_loadu_ps(d), _mm256_mul_ps(ws, h[r])));
-        }
-        return;
     }
     for (int r = 0; r < rows; r++) {
         const __m256 ry = _mm256_set1_ps(rw[r]);
@@ -42,14 +57,23 @@ void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t d
     }
 }
 
+void vs_splat_voxel1_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                          int rows, int nvec, float thr)
+{
+#define V1(N) voxel1_rows(dst, w, N, ds, cw, rw, rows, nvec, thr)
+    BY_SHEETS(V1)
+#undef V1
+}
+
 /* Four channels a pixel, each 8-float vector two pixels (pixel p of row r
  * has h = cw[p] rw[r], 0 where not > thr).  grad 0: every channel h
  * (splat_voxel4); grad 1: the gradient layout (h, h dx[p], h dy[r], h)
  * (splat_voxel_gs), as a (1, dx, dy, 1) factor vector: h times 1 is h.
  * Inlined with grad constant, so splat_voxel4 has no multiply more. */
-static inline void voxel4_rows(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw,
-                               const float *rw, const float *dx, const float *dy, int rows, int nvec, float thr,
-                               int grad)
+static inline __attribute__((always_inline)) void voxel4_rows(float *const *dst, const float *w, int ns, ptrdiff_t ds,
+                                                               const float *cw, const float *rw, const float *dx,
+                                                               const float *dy, int rows, int nvec, float thr,
+                                                               int grad)
 {
     const __m256 t = _mm256_set1_ps(thr), one = _mm256_set1_ps(1.0f);
     /* lane pattern of block vector q of 8 pixels: pixels 2q, 2q + 1, each in 4 channels */
@@ -80,11 +104,15 @@ static inline void voxel4_rows(float *const *dst, const float *w, int ns, ptrdif
 void vs_splat_voxel4_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                           int rows, int nvec, float thr)
 {
-    voxel4_rows(dst, w, ns, ds, cw, rw, NULL, NULL, rows, nvec, thr, 0);
+#define V4(N) voxel4_rows(dst, w, N, ds, cw, rw, NULL, NULL, rows, nvec, thr, 0)
+    BY_SHEETS(V4)
+#undef V4
 }
 
 void vs_splat_voxel_gs_avx2(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
                             const float *dx, const float *dy, int rows, int nvec, float thr)
 {
-    voxel4_rows(dst, w, ns, ds, cw, rw, dx, dy, rows, nvec, thr, 1);
+#define VGS(N) voxel4_rows(dst, w, N, ds, cw, rw, dx, dy, rows, nvec, thr, 1)
+    BY_SHEETS(VGS)
+#undef VGS
 }

@@ -3,16 +3,14 @@
  * once and added to every sheet; multiply then add as the scalar reference
  * (scalar.c; no FMA, kernels.h).  One-vector rows stay 256-bit. */
 #include "kernels.h"
+#include "by_sheets.h"
 
 #include <immintrin.h>
 
-void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
-                            int rows, int nvec, float thr)
+static inline __attribute__((always_inline)) void voxel1_wide(float *const *dst, const float *w, int ns, ptrdiff_t ds,
+                                                               const float *cw, const float *rw, int rows, int nvec,
+                                                               float thr)
 {
-    if (nvec == 1) {
-        vs_splat_voxel1_avx2(dst, w, ns, ds, cw, rw, rows, nvec, thr);
-        return;
-    }
     const __m512 t = _mm512_set1_ps(thr);
     const __m256 t8 = _mm256_set1_ps(thr);
     for (int r = 0; r < rows; r++) {
@@ -35,4 +33,16 @@ void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t
             }
         }
     }
+}
+
+void vs_splat_voxel1_avx512(float *const *dst, const float *w, int ns, ptrdiff_t ds, const float *cw, const float *rw,
+                            int rows, int nvec, float thr)
+{
+    if (nvec == 1) {
+        vs_splat_voxel1_avx2(dst, w, ns, ds, cw, rw, rows, nvec, thr);
+        return;
+    }
+#define V1(N) voxel1_wide(dst, w, N, ds, cw, rw, rows, nvec, thr)
+    BY_SHEETS(V1)
+#undef V1
 }
