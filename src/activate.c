@@ -569,9 +569,9 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                     n_splatted++;
                     const int slot = slots[k - opening];
                     if (batched)
-                        queue_section(ts, &sbat, &Ps, g, &sec, w4, ring[slot], &bbs[slot]);
+                        queue_section(ts, &sbat, &Ps, g, &sec, w4, sheet[k - opening], &bbs[slot]);
                     else
-                        vs_raster_skewed(t, &sec, w4, ch, ring[slot], &bbs[slot], &uc);
+                        vs_raster_skewed(t, &sec, w4, ch, sheet[k - opening], &bbs[slot], &uc);
                 }
                 continue;
             }
@@ -616,7 +616,7 @@ static inline __attribute__((always_inline)) void activate_sheet(tile_state *ts,
                 const int slot = slots[k - opening];
                 float w8[8];
                 weights8(job.wv, D, st->gradient_splats ? pv.E[lane][k - opening] : 0.0f, &F->fp, w8);
-                F->kern.splat_block(ring[slot] + job.off, job.ds, src, bs, j1 - j0, v1 - v0, w8);
+                F->kern.splat_block(sheet[k - opening] + job.off, job.ds, src, bs, j1 - j0, v1 - v0, w8);
                 n_vec += (uint64_t)((j1 - j0) * (v1 - v0));
                 rect_merge(&bbs[slot], &job.box);
             }

@@ -41,23 +41,6 @@ static inline float pre_opacity(const vs_frame *F, float a)
     return F->opacity_corr[i] + f * (F->opacity_corr[i + 1] - F->opacity_corr[i]);
 }
 
-static inline void shade_gradient(const vs_frame *F, float gx, float gy, float gz, float *d, float *sp)
-{
-    /* view space (per pixel, per pixel, per view unit) -> eye frame per mm */
-    float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
-    gx *= ppm;
-    gy *= ppm;
-    gz *= zpm;
-    if (F->s->exact_normals) {
-        double n[3] = {gx, gy, gz}, dd, ss;
-        vs_light_eval(&F->light, n, &dd, &ss);
-        *d = (float)dd;
-        *sp = (float)ss;
-    } else {
-        vs_shade_lut_eval(&F->lut, gx, gy, gz, d, sp);
-    }
-}
-
 /* Splat weights of the voxels p[lane], lane in the mask `live` (at most
  * VS_PLACE_BATCH), from their linear index in the volume: density (post),
  * or classified colour times the Phong terms of its gradient
@@ -187,7 +170,7 @@ void vs_shade_post_exact(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
             if (!(sb.alpha[o] > 0.0f)) continue;
             float *c = sb.g + 3 * o;
             float d, spec, rgb[3];
-            shade_gradient(F, c[0], c[1], c[2], &d, &spec);
+            vs_shade_gradient(F, c[0], c[1], c[2], &d, &spec);
             lookup_color(F, sv->q[ch * b] + (float)F->base, rgb);
             c[0] = rgb[0] * d + spec;
             c[1] = rgb[1] * d + spec;

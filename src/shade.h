@@ -20,6 +20,25 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
 void vs_shade_pre(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
 void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb);
+/* The Phong terms of a view-space gradient (per pixel, per pixel, per view
+ * unit): brought to the eye frame per mm, then the exact light model
+ * (--exact-normals) or the normal LUT. */
+static inline void vs_shade_gradient(const vs_frame *F, float gx, float gy, float gz, float *d, float *sp)
+{
+    const float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
+    gx *= ppm;
+    gy *= ppm;
+    gz *= zpm;
+    if (F->s->exact_normals) {
+        double n[3] = {gx, gy, gz}, dd, ss;
+        vs_light_eval(&F->light, n, &dd, &ss);
+        *d = (float)dd;
+        *sp = (float)ss;
+    } else {
+        vs_shade_lut_eval(&F->lut, gx, gy, gz, d, sp);
+    }
+}
+
 /* Post-alpha's light terms at a sheet pixel q4 (splatted diffuse and
  * specular times opacity, the opacity, the density): the splatted terms
  * over the splatted opacity, or (d0, s0), the light facing the eye, where

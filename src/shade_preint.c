@@ -17,10 +17,10 @@
  * A row is taken CHUNK pixels at a time: the live ones are listed, their
  * middle's and sheet k + 1's gradients lit together (one shade_terms call
  * through the normal LUT, kernels.h, or the exact light model), then each
- * pixel's table look-ups and mix.  Sheet k's terms are those shading sheet k - 1 took
- * for its k + 1, where that pixel was live there (97 % of them on the
- * translucent head; the others' are lit in a second call), so most pixels
- * light two gradients, not three.  (The middle's terms cannot be the mean
+ * pixel's table look-ups and mix.  Sheet k's terms are those shading
+ * sheet k - 1 took for its k + 1, where that pixel was live there (97 % of
+ * them on the translucent head; the others' are lit in a second call), so
+ * most pixels light two gradients, not three.  (The middle's terms cannot be the mean
  * of the ends': 2.7 dB worse for post-cd on the translucent head, 2.3
  * post-gs.) */
 #include "shade.h"
@@ -34,8 +34,7 @@
 #endif
 
 /* Phong terms d, s of n gradients g (3 floats each): the normal LUT by
- * the kernels, or the exact light model (as shade.c's shade_gradient:
- * view space to the eye frame per mm, in float) */
+ * the kernels, or the exact light model one gradient at a time */
 static void light_terms(const vs_frame *F, const sheet_view *sv, float *d, float *s, const float *g, int n)
 {
     if (!n) return;
@@ -43,14 +42,7 @@ static void light_terms(const vs_frame *F, const sheet_view *sv, float *d, float
         F->kern.shade_terms(d, s, g, n, sv->tabs);
         return;
     }
-    const float ppm = (float)F->cam.px_per_mm, zpm = (float)F->cam.z_per_mm;
-    for (int i = 0; i < n; i++) {
-        const float *gi = g + 3 * i;
-        double nv[3] = {gi[0] * ppm, gi[1] * ppm, gi[2] * zpm}, dd, ss;
-        vs_light_eval(&F->light, nv, &dd, &ss);
-        d[i] = (float)dd;
-        s[i] = (float)ss;
-    }
+    for (int i = 0; i < n; i++) vs_shade_gradient(F, g[3 * i], g[3 * i + 1], g[3 * i + 2], &d[i], &s[i]);
 }
 
 /* 1 over the joint opacity of two halves (0 where it emits nothing: an
@@ -64,10 +56,10 @@ static inline float inv_opacity(float a1, float a2)
 
 /* A pixel's colour from its two halves e (front: opacity, premultiplied
  * r g b; back: the same), each lit by Phong terms d, s: the halves front
- * over back, times inv = inv_opacity(e[0], e[4]). */
-static inline void emit_halves(const float e[8], float inv, float d1, float s1, float d2, float s2, float c[3])
+ * over back, over their joint opacity. */
+static inline void emit_halves(const float e[8], float d1, float s1, float d2, float s2, float c[3])
 {
-    const float a1 = e[0], a2 = e[4];
+    const float a1 = e[0], a2 = e[4], inv = inv_opacity(a1, a2);
 #if defined(__SSE2__)
     /* the same operations, a lane a channel (lane 0, the opacity's, unused) */
     const __m128 f = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(e), _mm_set1_ps(d1)), _mm_set1_ps(a1 * s1));
@@ -84,9 +76,9 @@ static inline void emit_halves(const float e[8], float inv, float d1, float s1, 
 /* Each half lit by the mean of the terms at its ends: the front half by
  * sheet k's (d[0], s[0]) and the middle's (d[1], s[1]), the back half by
  * the middle's and sheet k + 1's (d[2], s[2]). */
-static inline void emit_mixed(const float e[8], float inv, const float d[3], const float s[3], float c[3])
+static inline void emit_mixed(const float e[8], const float d[3], const float s[3], float c[3])
 {
-    emit_halves(e, inv, 0.5f * (d[0] + d[1]), 0.5f * (s[0] + s[1]), 0.5f * (d[1] + d[2]), 0.5f * (s[1] + s[2]), c);
+    emit_halves(e, 0.5f * (d[0] + d[1]), 0.5f * (s[0] + s[1]), 0.5f * (d[1] + d[2]), 0.5f * (s[1] + s[2]), c);
 }
 
 /* A row's pixels are taken CHUNK at a time: first, for all of them, the
@@ -228,7 +220,7 @@ void vs_shade_post_preint(const tile_ctx *t, const sheet_view *sv, shade_buf sb)
                     d[0] = sb.term[2 * o];
                     sp3[0] = sb.term[2 * o + 1];
                 }
-                emit_mixed(e, inv_opacity(e[0], e[4]), d, sp3, sb.g + 3 * o);
+                emit_mixed(e, d, sp3, sb.g + 3 * o);
                 /* sheet k + 1's terms, for when it is shaded */
                 sb.term[2 * o] = d[2];
                 sb.term[2 * o + 1] = sp3[2];
@@ -260,6 +252,6 @@ void vs_shade_post_alpha_preint(const tile_ctx *t, const sheet_view *sv, shade_b
             vs_post_alpha_terms(q, d0, s0, &dk, &sk);
             vs_post_alpha_terms(qn, d0, s0, &dn, &sn);
             const float d[3] = {dk, 0.5f * (dk + dn), dn}, s[3] = {sk, 0.5f * (sk + sn), sn};
-            emit_mixed(e, inv_opacity(e[0], e[4]), d, s, sb.g + 3 * o);
+            emit_mixed(e, d, s, sb.g + 3 * o);
         }
 }

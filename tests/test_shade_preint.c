@@ -1,8 +1,8 @@
 /* Pre-integrated shading (src/shade_preint.c) on random sheets, post-cd
  * and post-gs, exact normals and the normal LUT, orthographic and
  * perspective, in a tile laid out as the renderer lays it (apron, rows
- * longer than a chunk of 64 pixels, uneven spans, a slab that is not a power of two, a
- * frame base):
+ * longer than a chunk of 64 pixels, uneven spans, a slab that is not a
+ * power of two, a frame base):
  * - each live pixel's colour equals the formula of a segment in two halves
  *   (preintegrate.h) evaluated one pixel at a time with the scalar
  *   references (vs_preint_cell, vs_preint_bilerp, the light model or the
