@@ -78,6 +78,13 @@ typedef struct vs_frame {
     double base;
     int clip_to_volume;              /* empty space is visible: pixels whose sheet
                                         point lies outside the volume stay clear */
+    int face_norm;                   /* and, empty space visible, sheets divided
+                                        by the voxels' share near the faces
+                                        (face_cover.h)                          */
+    const struct vs_volume *cover;   /* whose voxels' share: the splatted grid,
+                                        or for the cubic copy (which reaches
+                                        past the faces) the volume itself       */
+    int cover_in0[3], cover_in1[3];  /* its voxels inside the volume's faces   */
     double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */
     int clip_hi_open[3];             /* 1: a point on clip_hi is outside (a crop
                                         face shared with the next brick)       */

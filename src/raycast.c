@@ -14,6 +14,7 @@
  * image is identical for any thread count. */
 #include "raycast.h"
 #include "raycast_job.h"
+#include "relevant.h"
 #include "camera.h"
 #include "classify.h"
 #include "context.h"
@@ -28,8 +29,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-static double voxel(const struct vs_volume *v, int i, int j, int k, double base)
+/* a voxel less base; outside the volume 0, or with faces the nearest one */
+static double voxel(const struct vs_volume *v, int i, int j, int k, double base, int faces)
 {
+    if (faces) {
+        i = i < 0 ? 0 : i >= v->dims[0] ? v->dims[0] - 1 : i;
+        j = j < 0 ? 0 : j >= v->dims[1] ? v->dims[1] - 1 : j;
+        k = k < 0 ? 0 : k >= v->dims[2] ? v->dims[2] - 1 : k;
+    }
     if (i < 0 || j < 0 || k < 0 || i >= v->dims[0] || j >= v->dims[1] || k >= v->dims[2]) return 0.0;
     double x = vs_volume_at(v, ((size_t)k * v->dims[1] + j) * v->dims[0] + i);
     return isfinite(x) ? x - base : 0.0;
@@ -39,15 +46,19 @@ static double voxel(const struct vs_volume *v, int i, int j, int k, double base)
  * normalised (settings' ray_normalize), f(p) = sum_j f_j 2^(-2|p-j|^2) / W(p):
  * the weights a partition of unity, so the kernel's lattice ripple, which
  * the plain sum carries into the gradient in proportion to the value (not
- * to the slope), is gone ---- */
+ * to the slope), is gone.  With faces (empty space visible), near a face
+ * the sum is divided by the voxels' share of the lattice sum, W_in / W
+ * (normalised: W_in replaces W), as splatting divides its sheets
+ * (face_cover.h) ---- */
 static double gauss_sample(const rc_job *J, const double p[3], double g[3])
 {
     const struct vs_volume *v = J->vol;
     /* voxels [lo, hi] within R inside the volume; the taps t0.. cover them
-     * and, normalised, every lattice point within R (the lattice sum W(p),
-     * which ripples within about 0.5 % of its mean over a cell for R = 2,
-     * counts those outside the volume too: they read as base, 0 here) */
-    int lo[3], hi[3], t0[3], nt[3];
+     * and, normalised or near a face, every lattice point within R (the
+     * lattice sum W(p), which ripples within about 0.5 % of its mean over a
+     * cell for R = 2, counts those outside the volume too: they read as
+     * base, 0 here) */
+    int lo[3], hi[3], t0[3], nt[3], near = 0;
     double d[3][MAX_TAPS], d2[3][MAX_TAPS], w[3][MAX_TAPS];
     for (int a = 0; a < 3; a++) {
         const int ulo = (int)ceil(p[a] - J->R), uhi = (int)floor(p[a] + J->R);
@@ -57,8 +68,13 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
             if (g) g[0] = g[1] = g[2] = 0.0;
             return 0.0;
         }
-        t0[a] = J->normalize ? ulo : lo[a];
-        nt[a] = (J->normalize ? uhi : hi[a]) - t0[a] + 1;
+        near |= J->faces && (lo[a] != ulo || hi[a] != uhi);
+    }
+    const int all = J->normalize || near;
+    for (int a = 0; a < 3; a++) {
+        const int ulo = (int)ceil(p[a] - J->R), uhi = (int)floor(p[a] + J->R);
+        t0[a] = all ? ulo : lo[a];
+        nt[a] = (all ? uhi : hi[a]) - t0[a] + 1;
         for (int i = 0; i < nt[a]; i++) {
             double t = p[a] - (t0[a] + i);
             d[a][i] = t;
@@ -68,6 +84,7 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
     }
     double row[MAX_TAPS];
     double sum = 0.0, sx = 0.0, sy = 0.0, sz = 0.0, W = 0.0, wx = 0.0, wy = 0.0, wz = 0.0;
+    double Wi = 0.0, wix = 0.0, wiy = 0.0, wiz = 0.0; /* the taps inside (near a face) */
     for (int kk = 0; kk < nt[2]; kk++) {
         const int k = t0[2] + kk;
         double rz = J->R2 - d2[2][kk];
@@ -77,23 +94,27 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
             double ry = rz - d2[1][jj];
             if (ry < 0.0) continue;
             double wyz = w[1][jj] * w[2][kk];
-            if (nt[0] != hi[0] - lo[0] + 1 || j < lo[1] || j > hi[1] || k < lo[2] || k > hi[2])
-                memset(row, 0, sizeof row); /* normalised: taps outside the volume */
-            if (j >= lo[1] && j <= hi[1] && k >= lo[2] && k <= hi[2])
-                vs_rc_fetch_row(v, j, k, lo[0], hi[0], row + (lo[0] - t0[0]), J->base);
-            double rs = 0.0, rx = 0.0, ks = 0.0, kx = 0.0;
+            const int row_in = j >= lo[1] && j <= hi[1] && k >= lo[2] && k <= hi[2];
+            if (nt[0] != hi[0] - lo[0] + 1 || !row_in) memset(row, 0, sizeof row); /* taps outside the volume */
+            if (row_in) vs_rc_fetch_row(v, j, k, lo[0], hi[0], row + (lo[0] - t0[0]), J->base);
+            double rs = 0.0, rx = 0.0, ks = 0.0, kx = 0.0, ki = 0.0, kix = 0.0;
             for (int i = 0; i < nt[0]; i++) {
                 if (d2[0][i] > ry) continue;
                 double fw = row[i] * w[0][i];
                 rs += fw;
                 rx += fw * d[0][i];
-                if (J->normalize) {
+                if (all) {
                     ks += w[0][i];
                     kx += w[0][i] * d[0][i];
+                }
+                if (near && row_in && t0[0] + i >= lo[0] && t0[0] + i <= hi[0]) {
+                    ki += w[0][i];
+                    kix += w[0][i] * d[0][i];
                 }
             }
             sum += rs * wyz;
             W += ks * wyz;
+            Wi += ki * wyz;
             if (g) {
                 sx += rx * wyz;
                 sy += rs * wyz * d[1][jj];
@@ -101,8 +122,37 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
                 wx += kx * wyz;
                 wy += ks * wyz * d[1][jj];
                 wz += ks * wyz * d[2][kk];
+                wix += kix * wyz;
+                wiy += ki * wyz * d[1][jj];
+                wiz += ki * wyz * d[2][kk];
             }
         }
+    }
+    if (near) {
+        if (!(Wi > 0.0)) {
+            if (g) g[0] = g[1] = g[2] = 0.0;
+            return 0.0;
+        }
+        const double c = -4.0 * M_LN2;
+        if (J->normalize) { /* sum / W_in */
+            const double f = sum / Wi;
+            if (g) {
+                g[0] = c * (sx - f * wix) / Wi;
+                g[1] = c * (sy - f * wiy) / Wi;
+                g[2] = c * (sz - f * wiz) / Wi;
+            }
+            return f;
+        }
+        /* b sum K, K = W / W_in: grad = b (grad(sum) K + sum grad K) */
+        const double K = W / Wi;
+        if (g) {
+            const double dK[3] = {c * (wx * Wi - W * wix) / (Wi * Wi), c * (wy * Wi - W * wiy) / (Wi * Wi),
+                                  c * (wz * Wi - W * wiz) / (Wi * Wi)};
+            g[0] = J->b * (c * sx * K + sum * dK[0]);
+            g[1] = J->b * (c * sy * K + sum * dK[1]);
+            g[2] = J->b * (c * sz * K + sum * dK[2]);
+        }
+        return J->b * sum * K;
     }
     if (J->normalize) {
         const double f = sum / W;
@@ -141,7 +191,7 @@ static double trilinear_sample(const rc_job *J, const double p[3], double g[3])
         for (int c = 0; c < 8; c++) {
             int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
             double wt = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
-            if (wt != 0.0) val += wt * voxel(v, i0[0] + dx, i0[1] + dy, i0[2] + dz, J->base);
+            if (wt != 0.0) val += wt * voxel(v, i0[0] + dx, i0[1] + dy, i0[2] + dz, J->base, J->faces);
         }
         return val;
     }
@@ -149,7 +199,7 @@ static double trilinear_sample(const rc_job *J, const double p[3], double g[3])
     for (int z = 0; z < 4; z++)
         for (int y = 0; y < 4; y++)
             for (int x = 0; x < 4; x++)
-                win[z][y][x] = voxel(v, i0[0] - 1 + x, i0[1] - 1 + y, i0[2] - 1 + z, J->base);
+                win[z][y][x] = voxel(v, i0[0] - 1 + x, i0[1] - 1 + y, i0[2] - 1 + z, J->base, J->faces);
     double val = 0.0;
     g[0] = g[1] = g[2] = 0.0;
     for (int c = 0; c < 8; c++) {
@@ -398,6 +448,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
                                                      : MODE_GAUSS;
     J->base = J->mode == MODE_ANALYTIC ? 0.0 : vs_volume_base(vol);
     J->normalize = J->mode == MODE_GAUSS && s->ray_normalize;
+    J->faces = J->mode != MODE_ANALYTIC && vs_classify_value_visible(cls, J->base);
     J->R = s->kernel_radius;
     J->R2 = J->R * J->R;
     J->b = vs_kernel_b(J->R);
@@ -407,8 +458,10 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         /* Sampled data reaches R beyond the outer voxels.  An analytic
          * function is defined everywhere; we cut it where the voxels end
          * (half a voxel beyond the outer ones, like the cube's edge) so that
-         * it describes the same finite object as the volume. */
-        double ext = J->mode == MODE_ANALYTIC ? 0.5 : J->R;
+         * it describes the same finite object as the volume.  Where empty
+         * space is visible, sampled data is cut there too, as splatting's
+         * sheets are (face_cover.h). */
+        double ext = J->mode == MODE_ANALYTIC || J->faces ? 0.5 : J->R;
         J->box_lo[a] = -ext;
         J->box_hi[a] = vol->dims[a] - 1 + ext;
     }

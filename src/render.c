@@ -10,6 +10,7 @@
 #include "gs_ripple.h"
 #include "pool.h"
 #include "preintegrate.h"
+#include "resample.h"
 #include "tile.h"
 #include "trace.h"
 
@@ -353,6 +354,16 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     F.base = s->pipeline == VS_PIPELINE_PRE ? 0.0 : vs_volume_base(full);
     const int zero_vis = s->pipeline != VS_PIPELINE_PRE && vs_classify_value_visible(F.cls, F.base);
     F.clip_to_volume = zero_vis || s->has_crop;
+    F.face_norm = zero_vis && !s->has_crop;
+    F.cover = ctx->resample && vol == ctx->resample->cubic ? full : vol;
+    for (int a = 0; a < 3; a++) {
+        /* a level's voxels inside the volume's faces (a level of the copy
+         * has some past them) */
+        const double lo = F.cover == full ? 0.0 : ceil(vs_volume_index_in(full, vol, a, -0.5));
+        const double hi = F.cover == full ? full->dims[a] - 1 : floor(vs_volume_index_in(full, vol, a, full->dims[a] - 0.5));
+        F.cover_in0[a] = lo > 0.0 ? (int)lo : 0;
+        F.cover_in1[a] = hi < F.cover->dims[a] - 1 ? (int)hi : F.cover->dims[a] - 1;
+    }
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
         /* the full volume's faces (index -0.5 and dims - 0.5) in the

@@ -12,6 +12,7 @@
  * every thread count. */
 #include "timing.h"
 #include "activate.h"
+#include "face_cover.h"
 #include "gs_ripple.h"
 #include "composite.h"
 #include "occlusion.h"
@@ -273,6 +274,10 @@ void vs_tile_render(void *arg, int worker, int task)
                 st->activate(&ts, opening, ring, bbox, R, kbase);
             else
                 vs_rasterize_sheet(&ts, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R]);
+            /* sheet `opening` is complete: no later voxel reaches it */
+            if (F->face_norm)
+                vs_face_norm_sheet(&t, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R], ch,
+                                   st->gradient_splats);
             const double t1 = vs_now_ms();
             ws->ms_rasterize += t1 - t0;
             if (tr) {

@@ -1,0 +1,109 @@
+/* The volume's faces when empty space is visible (face_cover.h). */
+#include "face_cover.h"
+#include "camera.h"
+#include "volume.h"
+
+#include <math.h>
+
+double vs_face_share(double t, int i0, int i1, double R, double *dshare)
+{
+    const int lo = (int)ceil(t - R), hi = (int)floor(t + R);
+    if (dshare) *dshare = 0.0;
+    if (lo >= i0 && hi <= i1) return 1.0;
+    double N = 0.0, D = 0.0, dN = 0.0, dD = 0.0;
+    for (int i = lo; i <= hi; i++) {
+        const double u = t - i, g = exp2(-2.0 * u * u), dg = -4.0 * M_LN2 * u * g;
+        D += g;
+        dD += dg;
+        if (i >= i0 && i <= i1) {
+            N += g;
+            dN += dg;
+        }
+    }
+    if (!(D > 0.0)) return 0.0;
+    if (dshare) *dshare = (dN * D - N * dD) / (D * D);
+    return N / D;
+}
+
+/* The pixels [*a, *b) of a row whose sheet points lie at least R inside
+ * every face (shares exactly 1): idx_a(x) = i0[a] + x di[a], the voxels
+ * inside [in0[a], in1[a]]. */
+static void interior_run(const double i0[3], const double di[3], const int *in0, const int *in1, double R, int x0,
+                         int x1, int *a, int *b)
+{
+    double lo = x0, hi = x1 - 1; /* real x range kept */
+    for (int k = 0; k < 3; k++) {
+        const double u0 = in0[k] + R, u1 = in1[k] - R; /* idx in [u0, u1]: interior */
+        if (di[k] == 0.0) {
+            if (!(i0[k] >= u0 && i0[k] <= u1)) hi = lo - 1.0;
+            continue;
+        }
+        double xa = (u0 - i0[k]) / di[k], xb = (u1 - i0[k]) / di[k];
+        if (xa > xb) {
+            const double s = xa;
+            xa = xb;
+            xb = s;
+        }
+        if (xa > lo) lo = xa;
+        if (xb < hi) hi = xb;
+    }
+    /* rounded inwards, one pixel more each side for the affine step's rounding */
+    *a = (int)ceil(lo) + 1;
+    *b = (int)floor(hi);
+    if (*b < *a) *a = *b = x0;
+}
+
+void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, int ch, int gs)
+{
+    const vs_frame *F = t->F;
+    const vs_camera *cam = &F->cam;
+    const struct vs_volume *vol = F->vol, *cv = F->cover;
+    const int *in0 = F->cover_in0, *in1 = F->cover_in1;
+    const double R = F->s->kernel_radius, slab = F->fp.slab, z = (k + 0.5) * slab;
+    /* d(cover index) / d(splatted index), per axis */
+    double sc[3];
+    for (int a = 0; a < 3; a++) sc[a] = vol->spacing[a] / cv->spacing[a];
+    const int x0 = bb->x0 > 0 ? bb->x0 : 0, x1 = bb->x1 < t->bw ? bb->x1 : t->bw;
+    const int y0 = bb->y0 > 0 ? bb->y0 : 0, y1 = bb->y1 < t->bh ? bb->y1 : t->bh;
+    for (int y = y0; y < y1; y++) {
+        /* a sheet point's index is affine in x along a row (perspective
+         * too: the sheet's scale is one number) */
+        double i0[3], i1[3], di[3];
+        const double v0[3] = {t->ox, y + t->oy, z}, v1[3] = {t->ox + 1.0, y + t->oy, z};
+        vs_camera_view_to_index(cam, v0, i0);
+        vs_camera_view_to_index(cam, v1, i1);
+        for (int a = 0; a < 3; a++) {
+            di[a] = (i1[a] - i0[a]) * sc[a];
+            i0[a] = cv == vol ? i0[a] : vs_volume_index_in(vol, cv, a, i0[a]);
+        }
+        int ra, rb;
+        interior_run(i0, di, in0, in1, R, x0, x1, &ra, &rb);
+        for (int x = x0; x < x1; x++) {
+            if (x == ra && rb > ra) x = rb;
+            if (x >= x1) break;
+            double c[3], dc[3], C = 1.0;
+            for (int a = 0; a < 3; a++) {
+                c[a] = vs_face_share(i0[a] + x * di[a], in0[a], in1[a], R, gs ? &dc[a] : NULL);
+                C *= c[a];
+            }
+            /* inside, or so far out that nothing reaches (clipped anyway) */
+            if (C >= 1.0 || C < 1e-3) continue;
+            float *p = buf + ((size_t)y * t->stride + x) * ch;
+            const double inv = 1.0 / C;
+            if (!gs) {
+                for (int i = 0; i < ch; i++) p[i] = (float)(p[i] * inv);
+                continue;
+            }
+            /* (S / C)' = (S' - (S / C) C') / C, C' in view units (x, y per
+             * pixel, z per view unit) as the splatted gradient's */
+            const double S = p[0] * inv;
+            double g[3] = {0.0, 0.0, 0.0};
+            for (int a = 0; a < 3; a++) {
+                const double dCa = dc[a] * c[(a + 1) % 3] * c[(a + 2) % 3] * sc[a];
+                for (int j = 0; j < 3; j++) g[j] += dCa * cam->Minv[a][j];
+            }
+            p[0] = (float)S;
+            for (int j = 0; j < 3; j++) p[1 + j] = (float)((p[1 + j] - S * slab * g[j]) * inv);
+        }
+    }
+}
