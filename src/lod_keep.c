@@ -20,9 +20,13 @@
  *    into the empty space on both sides, is;
  *  - each lost voxel's target T, the least value from its reconstruction
  *    upwards whose opacity is A, and its ceiling, the largest fine value
- *    under it.
- * A second pass raises each brick's lost voxels (never lowered, never
- * above the ceiling) so that the reconstruction there reaches T, counting
+ *    under it; where none is higher, or no value above has that opacity
+ *    (a dark sheet in bright tissue, under an iso-range with an upper
+ *    end), the greatest value downwards and its floor, the least fine
+ *    value under it.
+ * A second pass moves each brick's lost voxels (from the level's value
+ * towards the ceiling or floor, never past it) so that the reconstruction
+ * there reaches T, counting
  * the lost voxels of the bricks next to it within one voxel: a first step
  * divides what is missing by the kernel's weight over the lost voxels
  * (exact for a uniform sheet, line or point), three Jacobi steps of the
@@ -63,10 +67,11 @@ void vs_lod_keep_clear(vs_lod_cache *c)
 }
 
 /* A lost voxel: its place in its brick (as vs_voxel), the reconstruction
- * it must reach, and the greatest fine value under it. */
+ * it must reach, and how far it may move: raised, the greatest fine value
+ * under it; lowered, the least. */
 typedef struct lost_voxel {
     uint16_t at;
-    float t, top;
+    float t, bound;
 } lost_voxel;
 
 typedef struct keep_job {
@@ -80,6 +85,7 @@ typedef struct keep_job {
     float base;           /* what non-finite voxels and the outside read */
     float eps;            /* least opacity worth keeping */
     uint16_t *first;      /* lift's table */
+    uint16_t *last;       /* sink's */
     float peak;           /* the table's greatest opacity */
     int iso;              /* an iso-range and ramp: opacity in closed form */
     float a0, a1, inv2r;  /* its ramp's feet (lo - ramp, hi + ramp), 1 / (2 ramp) */
@@ -193,6 +199,37 @@ static uint16_t *lift_table(const vs_classify *c, float peak)
         for (int i = VS_TF_TABLE - 1; i >= 0; i--) row[i] = next = c->alpha[i] >= thr ? (uint16_t)i : next;
     }
     return f;
+}
+
+/* sink's table: the same downwards, the last entry up to i whose opacity
+ * reaches peak q / LIFT_Q (UINT16_MAX: none). */
+static uint16_t *sink_table(const vs_classify *c, float peak)
+{
+    uint16_t *f = malloc((size_t)(LIFT_Q + 1) * VS_TF_TABLE * sizeof *f);
+    if (!f) return NULL;
+    for (int q = 0; q <= LIFT_Q; q++) {
+        const float thr = peak * (float)q / LIFT_Q;
+        uint16_t *row = f + (size_t)q * VS_TF_TABLE, prev = UINT16_MAX;
+        for (int i = 0; i < VS_TF_TABLE; i++) row[i] = prev = c->alpha[i] >= thr ? (uint16_t)i : prev;
+    }
+    return f;
+}
+
+/* The greatest value at or below r whose opacity reaches a, from sink's
+ * table; NAN when none.  (A dark structure thinner than a level voxel, in
+ * an iso-range with an upper end, is averaged above it: it is lowered.) */
+static float sink(const keep_job *J, float r, float a)
+{
+    const vs_classify *c = J->c;
+    const double x = (r - c->vmin) * c->scale;
+    if (!(x >= 0.0)) return NAN;
+    int q = (int)(a / J->peak * LIFT_Q);
+    q = q < 0 ? 0 : q > LIFT_Q ? LIFT_Q : q;
+    int i = J->last[(size_t)q * VS_TF_TABLE + (x >= VS_TF_TABLE - 1 ? VS_TF_TABLE - 1 : (int)floor(x))];
+    if (i == UINT16_MAX) return NAN;
+    for (; i >= 0; i--)
+        if (c->alpha[i] >= a) return (float)(c->vmin + i / c->scale);
+    return NAN;
 }
 
 /* The least value at or above r whose opacity reaches a (0 < a <= peak),
@@ -363,22 +400,29 @@ static size_t find_lost(const keep_job *J, float *s, int bi, int bj, int bk)
                 const size_t ci = ((size_t)(z + 2) * cn[1] + y + 2) * cn[0] + x + 2;
                 const float a = A[((size_t)z * n[1] + y) * n[0] + x];
                 if (!(a > J->eps) || !(around[ci] < 0.5f * a)) continue;
-                /* the greatest fine value under it: no higher */
+                /* the greatest and least fine values under it: no further */
                 const int p[3] = {J->dec[0] ? 2 * x + 1 : x + 1, J->dec[1] ? 2 * y + 1 : y + 1,
                                   J->dec[2] ? 2 * z + 1 : z + 1};
-                float vmax = -INFINITY;
+                float vmax = -INFINITY, vmin = INFINITY;
                 for (int tz = 0; tz < (J->dec[2] ? 4 : 1); tz++)
                     for (int ty = 0; ty < (J->dec[1] ? 4 : 1); ty++)
                         for (int tx = 0; tx < (J->dec[0] ? 4 : 1); tx++) {
                             const float v = fv[((size_t)(p[2] + tz) * fn[1] + p[1] + ty) * fn[0] + p[0] + tx];
                             if (v > vmax) vmax = v;
+                            if (v < vmin) vmin = v;
                         }
-                const float t = lift(J, cr[ci], a);
-                if (!(t > cr[ci]) || !(vmax > cv[ci])) continue;
+                /* raised, as a bright sheet averaged into dark space; else
+                 * lowered, as a dark one into bright */
+                float t = lift(J, cr[ci], a), bound = vmax;
+                if (!(t > cr[ci]) || !(vmax > cv[ci])) {
+                    t = sink(J, cr[ci], a);
+                    bound = vmin;
+                    if (!(t < cr[ci]) || !(vmin < cv[ci])) continue;
+                }
                 if (!list && !(list = malloc((size_t)VS_BRICK * VS_BRICK * VS_BRICK * sizeof *list))) return SIZE_MAX;
                 list[lost].at = (uint16_t)(x | y << VS_BRICK_BITS | z << (2 * VS_BRICK_BITS));
                 list[lost].t = t;
-                list[lost].top = vmax;
+                list[lost].bound = bound;
                 lost++;
             }
     const size_t b = ((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi;
@@ -402,7 +446,7 @@ static void raise_lost(const keep_job *J, float *s, int bi, int bj, int bk)
     }
     const size_t csz = (size_t)cn[0] * cn[1] * cn[2];
     float *cv = s, *cr = cv + CB * CB * CB, *tgt = cr + CB * CB * CB, *gain = tgt + CB * CB * CB,
-          *nv = gain + CB * CB * CB, *top = nv + CB * CB * CB, *tmp = top + CB * CB * CB;
+          *nv = gain + CB * CB * CB, *bnd = nv + CB * CB * CB, *tmp = bnd + CB * CB * CB;
     for (size_t i = 0; i < csz; i++) tgt[i] = NAN;
     for (int dk = -1; dk <= 1; dk++)
         for (int dj = -1; dj <= 1; dj++)
@@ -419,7 +463,7 @@ static void raise_lost(const keep_job *J, float *s, int bi, int bj, int bk)
                     if (l[0] < -1 || l[1] < -1 || l[2] < -1 || l[0] > n[0] || l[1] > n[1] || l[2] > n[2]) continue;
                     const size_t ci = ((size_t)(l[2] + 3) * cn[1] + l[1] + 3) * cn[0] + l[0] + 3;
                     tgt[ci] = lv->t;
-                    top[ci] = lv->top;
+                    bnd[ci] = lv->bound;
                 }
             }
     read_block(J->coarse, co, cn, J->base, cv);
@@ -436,8 +480,10 @@ static void raise_lost(const keep_job *J, float *s, int bi, int bj, int bk)
         }
         for (size_t i = 0; i < csz; i++) {
             if (isnan(tgt[i])) continue;
+            /* between the level's value and the bound */
+            const float lo = cv[i] < bnd[i] ? cv[i] : bnd[i], hi = cv[i] < bnd[i] ? bnd[i] : cv[i];
             float v = nv[i] + (tgt[i] - cr[i]) / gain[i];
-            v = v < cv[i] ? cv[i] : v > top[i] ? top[i] : v;
+            v = v < lo ? lo : v > hi ? hi : v;
             nv[i] = v;
         }
     }
@@ -501,6 +547,7 @@ static void class_job(keep_job *J, const vs_classify *c, const struct vs_volume 
         J->inv2r = (float)(0.5 / c->ramp);
     }
     J->first = lift_table(c, J->peak);
+    J->last = sink_table(c, J->peak);
 }
 
 /* The copy of lv patched against fine for the classification in *cj
@@ -589,7 +636,7 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
         if (!worked) {
             worked = 1;
             class_job(&cj, c, vol);
-            if (cj.peak > 0.0f && !cj.first) {
+            if (cj.peak > 0.0f && (!cj.first || !cj.last)) {
                 st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "levels of detail: out of memory");
                 break;
             }
@@ -621,6 +668,7 @@ vs_status vs_lod_keep(vs_context *ctx, struct vs_pool *pool, vs_lod_cache *cache
     }
     if (worked) {
         free(cj.first);
+        free(cj.last);
         *ms = vs_now_ms() - t0;
     }
     if (st != VS_OK) return st;

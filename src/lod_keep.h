@@ -6,8 +6,9 @@
  * level where that happened -- the level's reconstruction transparent all
  * around a voxel while the finer level's, classified and filtered down,
  * is not -- are raised until the level's reconstructed opacity there is
- * the finer level's average.  Nothing else changes, so smooth surfaces (a
- * visible voxel next door) keep the plain level exactly. */
+ * the finer level's average (lowered, for a dark structure averaged above
+ * an iso-range with an upper end).  Nothing else changes, so smooth
+ * surfaces (a visible voxel next door) keep the plain level exactly. */
 #ifndef VS_LOD_KEEP_H
 #define VS_LOD_KEEP_H
 
