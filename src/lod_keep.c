@@ -185,32 +185,22 @@ static void max3(const float *b, float *tmp, float *out, const int n[3])
     }
 }
 
-/* lift's table: for LIFT_Q + 1 steps q of the peak opacity and each entry
- * i of the opacity table, the first entry from i on whose opacity reaches
- * peak q / LIFT_Q (VS_TF_TABLE: none). */
+/* lift's and sink's tables: for LIFT_Q + 1 steps q of the peak opacity and
+ * each entry i of the opacity table, the nearest entry from i on (up:
+ * lift's) or up to i (sink's) whose opacity reaches peak q / LIFT_Q; none:
+ * VS_TF_TABLE up, UINT16_MAX down. */
 #define LIFT_Q 64
-static uint16_t *lift_table(const vs_classify *c, float peak)
+static uint16_t *reach_table(const vs_classify *c, float peak, int up)
 {
     uint16_t *f = malloc((size_t)(LIFT_Q + 1) * VS_TF_TABLE * sizeof *f);
     if (!f) return NULL;
     for (int q = 0; q <= LIFT_Q; q++) {
         const float thr = peak * (float)q / LIFT_Q;
-        uint16_t *row = f + (size_t)q * VS_TF_TABLE, next = VS_TF_TABLE;
-        for (int i = VS_TF_TABLE - 1; i >= 0; i--) row[i] = next = c->alpha[i] >= thr ? (uint16_t)i : next;
-    }
-    return f;
-}
-
-/* sink's table: the same downwards, the last entry up to i whose opacity
- * reaches peak q / LIFT_Q (UINT16_MAX: none). */
-static uint16_t *sink_table(const vs_classify *c, float peak)
-{
-    uint16_t *f = malloc((size_t)(LIFT_Q + 1) * VS_TF_TABLE * sizeof *f);
-    if (!f) return NULL;
-    for (int q = 0; q <= LIFT_Q; q++) {
-        const float thr = peak * (float)q / LIFT_Q;
-        uint16_t *row = f + (size_t)q * VS_TF_TABLE, prev = UINT16_MAX;
-        for (int i = 0; i < VS_TF_TABLE; i++) row[i] = prev = c->alpha[i] >= thr ? (uint16_t)i : prev;
+        uint16_t *row = f + (size_t)q * VS_TF_TABLE, near = up ? VS_TF_TABLE : UINT16_MAX;
+        for (int n = 0; n < VS_TF_TABLE; n++) {
+            const int i = up ? VS_TF_TABLE - 1 - n : n;
+            row[i] = near = c->alpha[i] >= thr ? (uint16_t)i : near;
+        }
     }
     return f;
 }
@@ -546,8 +536,8 @@ static void class_job(keep_job *J, const vs_classify *c, const struct vs_volume 
         J->a1 = isfinite(c->hi) ? (float)(c->hi + c->ramp) : INFINITY;
         J->inv2r = (float)(0.5 / c->ramp);
     }
-    J->first = lift_table(c, J->peak);
-    J->last = sink_table(c, J->peak);
+    J->first = reach_table(c, J->peak, 1);
+    J->last = reach_table(c, J->peak, 0);
 }
 
 /* The copy of lv patched against fine for the classification in *cj

@@ -552,21 +552,32 @@ static void test_thin_shell(vs_context *ctx)
  * whose value lies just over the iso band (u8: air 0, shell SHELL, iso
  * 100 ramp 40) is visible at full resolution; at level 1 reaching its
  * opacity would need more than SHELL, where the ceiling holds it. */
-static void test_keep_ceiling(vs_context *ctx)
+/* n^3 u8: `in` within half of radius r about c (where x > x_min), else
+ * `out` */
+static vs_volume *u8_shell(vs_context *ctx, int n, const double c[3], double r, double half, double x_min, int in,
+                           int out)
 {
-    enum { N = 64, SHELL = 150 };
-    const int d[3] = {N, N, N};
+    const int d[3] = {n, n, n};
     vs_volume *v = NULL;
     CHECK(vs_volume_create(ctx, VS_U8, d, NULL, &v) == VS_OK, "create");
-    if (!v) return;
+    if (!v) return NULL;
     uint8_t *u = vs_volume_data(v);
-    for (int k = 0; k < N; k++)
-        for (int j = 0; j < N; j++)
-            for (int i = 0; i < N; i++) {
-                const double r = sqrt((i - 31.5) * (i - 31.5) + (j - 31.5) * (j - 31.5) + (k - 31.5) * (k - 31.5));
-                u[((size_t)k * N + j) * N + i] = fabs(r - 24.0) < 1.0 ? SHELL : 0;
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                const double q = sqrt((i - c[0]) * (i - c[0]) + (j - c[1]) * (j - c[1]) + (k - c[2]) * (k - c[2]));
+                u[((size_t)k * n + j) * n + i] = (uint8_t)(fabs(q - r) < half && i > x_min ? in : out);
             }
     vs_volume_update_range(v);
+    return v;
+}
+
+static void test_keep_ceiling(vs_context *ctx)
+{
+    enum { SHELL = 150 };
+    static const double c[3] = {31.5, 31.5, 31.5};
+    vs_volume *v = u8_shell(ctx, 64, c, 24.0, 1.0, -1.0, SHELL, 0);
+    if (!v) return;
     vs_settings s = iso_settings(32, 100, 40);
     s.threads = 2;
     vs_stats a;
@@ -593,19 +604,10 @@ static void test_keep_ceiling(vs_context *ctx)
  * under DARK). */
 static void test_dark_sheet(vs_context *ctx)
 {
-    enum { N = 96, DARK = 30 };
-    const int d[3] = {N, N, N};
-    vs_volume *v = NULL;
-    CHECK(vs_volume_create(ctx, VS_U8, d, NULL, &v) == VS_OK, "create");
+    enum { DARK = 30 };
+    static const double c[3] = {20.0, 48.0, 48.0};
+    vs_volume *v = u8_shell(ctx, 96, c, 40.0, 0.5, 44.0, DARK, 200);
     if (!v) return;
-    uint8_t *u = vs_volume_data(v);
-    for (int k = 0; k < N; k++)
-        for (int j = 0; j < N; j++)
-            for (int i = 0; i < N; i++) {
-                const double r = sqrt((i - 20.0) * (i - 20.0) + (j - 48.0) * (j - 48.0) + (k - 48.0) * (k - 48.0));
-                u[((size_t)k * N + j) * N + i] = fabs(r - 40.0) < 0.5 && i > 44 ? DARK : 200;
-            }
-    vs_volume_update_range(v);
     vs_settings s = iso_settings(48, 10, 10);
     s.iso_hi = 100;
     s.iso_opacity = 0.6f;
