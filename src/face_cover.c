@@ -5,7 +5,11 @@
 
 #include <math.h>
 
-double vs_face_share(double t, int i0, int i1, double R, double *dshare)
+/* The share at index t of voxels i0..i1 in the 1-D lattice sum of the
+ * kernel 2^(-2 u^2), |u| <= R, and its derivative in t (dshare may be
+ * NULL).  Exactly 1 (derivative 0) where every lattice point within R lies
+ * inside. */
+static double face_share(double t, int i0, int i1, double R, double *dshare)
 {
     const int lo = (int)ceil(t - R), hi = (int)floor(t + R);
     if (dshare) *dshare = 0.0;
@@ -83,7 +87,7 @@ void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, in
             if (x >= x1) break;
             double c[3], dc[3], C = 1.0;
             for (int a = 0; a < 3; a++) {
-                c[a] = vs_face_share(i0[a] + x * di[a], in0[a], in1[a], R, gs ? &dc[a] : NULL);
+                c[a] = face_share(i0[a] + x * di[a], in0[a], in1[a], R, gs ? &dc[a] : NULL);
                 C *= c[a];
             }
             /* inside, or so far out that nothing reaches (clipped anyway) */

@@ -15,12 +15,6 @@
 
 #include "tile.h"
 
-/* The share at index t of voxels i0..i1 in the 1-D lattice sum of the
- * kernel 2^(-2 u^2), |u| <= R, and its derivative in t (dshare may be
- * NULL).  Exactly 1 (derivative 0) where every lattice point within R lies
- * inside. */
-double vs_face_share(double t, int i0, int i1, double R, double *dshare);
-
 /* Sheet k of the tile, complete (its touched box bb, ch channels a pixel):
  * each pixel within the kernel's reach of a face divided by the voxels'
  * share at its sheet point (the product of the three axes' shares); with

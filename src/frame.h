@@ -78,12 +78,11 @@ typedef struct vs_frame {
     double base;
     int clip_to_volume;              /* empty space is visible: pixels whose sheet
                                         point lies outside the volume stay clear */
-    int face_norm;                   /* and, empty space visible, sheets divided
-                                        by the voxels' share near the faces
-                                        (face_cover.h)                          */
-    const struct vs_volume *cover;   /* whose voxels' share: the splatted grid,
+    const struct vs_volume *cover;   /* empty space visible: sheets are divided
+                                        near the faces by this grid's voxels'
+                                        share (face_cover.h): the splatted one,
                                         or for the cubic copy (which reaches
-                                        past the faces) the volume itself       */
+                                        past the faces) the volume; else NULL  */
     int cover_in0[3], cover_in1[3];  /* its voxels inside the volume's faces   */
     double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */
     int clip_hi_open[3];             /* 1: a point on clip_hi is outside (a crop

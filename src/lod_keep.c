@@ -84,8 +84,7 @@ typedef struct keep_job {
     int dec[3];           /* axes the level halved */
     float base;           /* what non-finite voxels and the outside read */
     float eps;            /* least opacity worth keeping */
-    uint16_t *first;      /* lift's table */
-    uint16_t *last;       /* sink's */
+    uint16_t *first, *last; /* reach's tables: up (lift) and down (sink) */
     float peak;           /* the table's greatest opacity */
     int iso;              /* an iso-range and ramp: opacity in closed form */
     float a0, a1, inv2r;  /* its ramp's feet (lo - ramp, hi + ramp), 1 / (2 ramp) */
@@ -187,8 +186,8 @@ static void max3(const float *b, float *tmp, float *out, const int n[3])
 
 /* lift's and sink's tables: for LIFT_Q + 1 steps q of the peak opacity and
  * each entry i of the opacity table, the nearest entry from i on (up:
- * lift's) or up to i (sink's) whose opacity reaches peak q / LIFT_Q; none:
- * VS_TF_TABLE up, UINT16_MAX down. */
+ * lift's) or up to i (sink's) whose opacity reaches peak q / LIFT_Q
+ * (VS_TF_TABLE: none). */
 #define LIFT_Q 64
 static uint16_t *reach_table(const vs_classify *c, float peak, int up)
 {
@@ -196,7 +195,7 @@ static uint16_t *reach_table(const vs_classify *c, float peak, int up)
     if (!f) return NULL;
     for (int q = 0; q <= LIFT_Q; q++) {
         const float thr = peak * (float)q / LIFT_Q;
-        uint16_t *row = f + (size_t)q * VS_TF_TABLE, near = up ? VS_TF_TABLE : UINT16_MAX;
+        uint16_t *row = f + (size_t)q * VS_TF_TABLE, near = VS_TF_TABLE;
         for (int n = 0; n < VS_TF_TABLE; n++) {
             const int i = up ? VS_TF_TABLE - 1 - n : n;
             row[i] = near = c->alpha[i] >= thr ? (uint16_t)i : near;
@@ -205,35 +204,20 @@ static uint16_t *reach_table(const vs_classify *c, float peak, int up)
     return f;
 }
 
-/* The greatest value at or below r whose opacity reaches a, from sink's
- * table; NAN when none.  (A dark structure thinner than a level voxel, in
- * an iso-range with an upper end, is averaged above it: it is lowered.) */
-static float sink(const keep_job *J, float r, float a)
+/* The nearest value from r upwards (up: lift) or downwards (sink: a dark
+ * structure thinner than a level voxel, under an iso-range with an upper
+ * end, is averaged above it) whose opacity reaches a (0 < a <= peak), from
+ * the tables; NAN when none.  Entries between r and the table's entry lie
+ * under peak q / LIFT_Q <= a: the search starts there. */
+static float reach(const keep_job *J, float r, float a, int up)
 {
     const vs_classify *c = J->c;
     const double x = (r - c->vmin) * c->scale;
-    if (!(x >= 0.0)) return NAN;
+    if (up ? !(x < VS_TF_TABLE - 1) : !(x >= 0.0)) return NAN;
     int q = (int)(a / J->peak * LIFT_Q);
     q = q < 0 ? 0 : q > LIFT_Q ? LIFT_Q : q;
-    int i = J->last[(size_t)q * VS_TF_TABLE + (x >= VS_TF_TABLE - 1 ? VS_TF_TABLE - 1 : (int)floor(x))];
-    if (i == UINT16_MAX) return NAN;
-    for (; i >= 0; i--)
-        if (c->alpha[i] >= a) return (float)(c->vmin + i / c->scale);
-    return NAN;
-}
-
-/* The least value at or above r whose opacity reaches a (0 < a <= peak),
- * from the table; NAN when none.  Entries before first[q][i] lie under
- * peak q / LIFT_Q <= a: the search starts there. */
-static float lift(const keep_job *J, float r, float a)
-{
-    const vs_classify *c = J->c;
-    const double x = (r - c->vmin) * c->scale;
-    if (!(x < VS_TF_TABLE - 1)) return NAN;
-    int q = (int)(a / J->peak * LIFT_Q);
-    q = q < 0 ? 0 : q > LIFT_Q ? LIFT_Q : q;
-    int i = J->first[(size_t)q * VS_TF_TABLE + (x <= 0.0 ? 0 : (int)ceil(x))];
-    for (; i < VS_TF_TABLE; i++)
+    const int from = up ? (x <= 0.0 ? 0 : (int)ceil(x)) : (x >= VS_TF_TABLE - 1 ? VS_TF_TABLE - 1 : (int)floor(x));
+    for (int i = (up ? J->first : J->last)[(size_t)q * VS_TF_TABLE + from]; i >= 0 && i < VS_TF_TABLE; i += up ? 1 : -1)
         if (c->alpha[i] >= a) return (float)(c->vmin + i / c->scale);
     return NAN;
 }
@@ -403,9 +387,9 @@ static size_t find_lost(const keep_job *J, float *s, int bi, int bj, int bk)
                         }
                 /* raised, as a bright sheet averaged into dark space; else
                  * lowered, as a dark one into bright */
-                float t = lift(J, cr[ci], a), bound = vmax;
+                float t = reach(J, cr[ci], a, 1), bound = vmax;
                 if (!(t > cr[ci]) || !(vmax > cv[ci])) {
-                    t = sink(J, cr[ci], a);
+                    t = reach(J, cr[ci], a, 0);
                     bound = vmin;
                     if (!(t < cr[ci]) || !(vmin < cv[ci])) continue;
                 }
@@ -421,9 +405,9 @@ static size_t find_lost(const keep_job *J, float *s, int bi, int bj, int bk)
     return lost;
 }
 
-/* Phase 2, brick (bi, bj, bk): its lost voxels raised, those of the
+/* Phase 2, brick (bi, bj, bk): its lost voxels moved, those of the
  * bricks around it within one voxel taken into account. */
-static void raise_lost(const keep_job *J, float *s, int bi, int bj, int bk)
+static void move_lost(const keep_job *J, float *s, int bi, int bj, int bk)
 {
     const int *cd = J->coarse->dims;
     const int bo[3] = {bi, bj, bk};
@@ -504,19 +488,19 @@ static void find_slab(void *arg, int worker, int bk)
     J->patched[bk] = lost;
 }
 
-static void raise_slab(void *arg, int worker, int bk)
+static void move_slab(void *arg, int worker, int bk)
 {
     const keep_job *J = arg;
     float *s = J->scratch + (size_t)worker * J->per_worker;
     for (int bj = 0; bj < J->nb[1]; bj++)
         for (int bi = 0; bi < J->nb[0]; bi++)
-            if (J->nlost[((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi]) raise_lost(J, s, bi, bj, bk);
+            if (J->nlost[((size_t)bk * J->nb[1] + bj) * J->nb[0] + bi]) move_lost(J, s, bi, bj, bk);
 }
 
 /* What every level's job takes from the classification c (the rest of
- * *J zero): its opacity's peak, the closed form of an iso-range, lift's
- * table (J->first: free it; NULL when out of memory, or when nothing is
- * visible: peak 0). */
+ * *J zero): its opacity's peak, the closed form of an iso-range, reach's
+ * tables (J->first, J->last: free them; NULL when out of memory, or when
+ * nothing is visible: peak 0). */
 static void class_job(keep_job *J, const vs_classify *c, const struct vs_volume *vol)
 {
     memset(J, 0, sizeof *J);
@@ -579,11 +563,11 @@ static vs_status keep_level(vs_context *ctx, struct vs_pool *pool, const keep_jo
         lost += J.patched[k];
     }
     if (!lost) goto done;
-    /* the copy, then its lost voxels raised */
+    /* the copy, then its lost voxels moved */
     if ((st = vs_volume_alloc(ctx, lv->type, lv->dims, lv->spacing, &v)) != VS_OK) goto done;
     memcpy(v->data, lv->data, (size_t)lv->dims[0] * lv->dims[1] * lv->dims[2] * vs_type_size(lv->type));
     J.out = v;
-    vs_pool_run(pool, J.nb[2], raise_slab, &J);
+    vs_pool_run(pool, J.nb[2], move_slab, &J);
 done:
     if (J.lost)
         for (size_t b = 0; b < nbt; b++) free(J.lost[b]);

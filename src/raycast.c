@@ -36,8 +36,9 @@ static double voxel(const struct vs_volume *v, int i, int j, int k, double base,
         i = i < 0 ? 0 : i >= v->dims[0] ? v->dims[0] - 1 : i;
         j = j < 0 ? 0 : j >= v->dims[1] ? v->dims[1] - 1 : j;
         k = k < 0 ? 0 : k >= v->dims[2] ? v->dims[2] - 1 : k;
+    } else if (i < 0 || j < 0 || k < 0 || i >= v->dims[0] || j >= v->dims[1] || k >= v->dims[2]) {
+        return 0.0;
     }
-    if (i < 0 || j < 0 || k < 0 || i >= v->dims[0] || j >= v->dims[1] || k >= v->dims[2]) return 0.0;
     double x = vs_volume_at(v, ((size_t)k * v->dims[1] + j) * v->dims[0] + i);
     return isfinite(x) ? x - base : 0.0;
 }
@@ -58,23 +59,22 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
      * lattice sum W(p), which ripples within about 0.5 % of its mean over a
      * cell for R = 2, counts those outside the volume too: they read as
      * base, 0 here) */
-    int lo[3], hi[3], t0[3], nt[3], near = 0;
+    int ulo[3], uhi[3], lo[3], hi[3], t0[3], nt[3], near = 0;
     double d[3][MAX_TAPS], d2[3][MAX_TAPS], w[3][MAX_TAPS];
     for (int a = 0; a < 3; a++) {
-        const int ulo = (int)ceil(p[a] - J->R), uhi = (int)floor(p[a] + J->R);
-        lo[a] = ulo < 0 ? 0 : ulo;
-        hi[a] = uhi > v->dims[a] - 1 ? v->dims[a] - 1 : uhi;
+        ulo[a] = (int)ceil(p[a] - J->R), uhi[a] = (int)floor(p[a] + J->R);
+        lo[a] = ulo[a] < 0 ? 0 : ulo[a];
+        hi[a] = uhi[a] > v->dims[a] - 1 ? v->dims[a] - 1 : uhi[a];
         if (lo[a] > hi[a]) {
             if (g) g[0] = g[1] = g[2] = 0.0;
             return 0.0;
         }
-        near |= J->faces && (lo[a] != ulo || hi[a] != uhi);
+        near |= J->faces && (lo[a] != ulo[a] || hi[a] != uhi[a]);
     }
     const int all = J->normalize || near;
     for (int a = 0; a < 3; a++) {
-        const int ulo = (int)ceil(p[a] - J->R), uhi = (int)floor(p[a] + J->R);
-        t0[a] = all ? ulo : lo[a];
-        nt[a] = (all ? uhi : hi[a]) - t0[a] + 1;
+        t0[a] = all ? ulo[a] : lo[a];
+        nt[a] = (all ? uhi[a] : hi[a]) - t0[a] + 1;
         for (int i = 0; i < nt[a]; i++) {
             double t = p[a] - (t0[a] + i);
             d[a][i] = t;
@@ -128,23 +128,22 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
             }
         }
     }
-    if (near) {
-        if (!(Wi > 0.0)) {
-            if (g) g[0] = g[1] = g[2] = 0.0;
-            return 0.0;
+    if (near && !(Wi > 0.0)) { /* no voxel within R reaches (the sphere's corners) */
+        if (g) g[0] = g[1] = g[2] = 0.0;
+        return 0.0;
+    }
+    if (J->normalize) { /* over W, or near a face over the taps inside */
+        const double Wn = near ? Wi : W, f = sum / Wn;
+        if (g) { /* (grad S - f grad W) / W */
+            const double c = -4.0 * M_LN2 / Wn;
+            g[0] = c * (sx - f * (near ? wix : wx));
+            g[1] = c * (sy - f * (near ? wiy : wy));
+            g[2] = c * (sz - f * (near ? wiz : wz));
         }
-        const double c = -4.0 * M_LN2;
-        if (J->normalize) { /* sum / W_in */
-            const double f = sum / Wi;
-            if (g) {
-                g[0] = c * (sx - f * wix) / Wi;
-                g[1] = c * (sy - f * wiy) / Wi;
-                g[2] = c * (sz - f * wiz) / Wi;
-            }
-            return f;
-        }
-        /* b sum K, K = W / W_in: grad = b (grad(sum) K + sum grad K) */
-        const double K = W / Wi;
+        return f;
+    }
+    if (near) { /* b sum K, K = W / W_in: grad = b (grad(sum) K + sum grad K) */
+        const double c = -4.0 * M_LN2, K = W / Wi;
         if (g) {
             const double dK[3] = {c * (wx * Wi - W * wix) / (Wi * Wi), c * (wy * Wi - W * wiy) / (Wi * Wi),
                                   c * (wz * Wi - W * wiz) / (Wi * Wi)};
@@ -153,16 +152,6 @@ static double gauss_sample(const rc_job *J, const double p[3], double g[3])
             g[2] = J->b * (c * sz * K + sum * dK[2]);
         }
         return J->b * sum * K;
-    }
-    if (J->normalize) {
-        const double f = sum / W;
-        if (g) { /* (grad S - f grad W) / W */
-            const double c = -4.0 * M_LN2 / W;
-            g[0] = c * (sx - f * wx);
-            g[1] = c * (sy - f * wy);
-            g[2] = c * (sz - f * wz);
-        }
-        return f;
     }
     if (g) {
         /* d/dp_a 2^(-2|p-j|^2) = -4 ln2 (p_a - j_a) 2^(-2|p-j|^2) */

@@ -354,16 +354,11 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     F.base = s->pipeline == VS_PIPELINE_PRE ? 0.0 : vs_volume_base(full);
     const int zero_vis = s->pipeline != VS_PIPELINE_PRE && vs_classify_value_visible(F.cls, F.base);
     F.clip_to_volume = zero_vis || s->has_crop;
-    F.face_norm = zero_vis && !s->has_crop;
-    F.cover = ctx->resample && vol == ctx->resample->cubic ? full : vol;
-    for (int a = 0; a < 3; a++) {
-        /* a level's voxels inside the volume's faces (a level of the copy
-         * has some past them) */
-        const double lo = F.cover == full ? 0.0 : ceil(vs_volume_index_in(full, vol, a, -0.5));
-        const double hi = F.cover == full ? full->dims[a] - 1 : floor(vs_volume_index_in(full, vol, a, full->dims[a] - 0.5));
-        F.cover_in0[a] = lo > 0.0 ? (int)lo : 0;
-        F.cover_in1[a] = hi < F.cover->dims[a] - 1 ? (int)hi : F.cover->dims[a] - 1;
-    }
+    /* empty space visible: sheets divided near the faces by the share of
+     * the voxels inside them (face_cover.h); the cubic copy reaches past
+     * the faces, so the volume's own grid's */
+    const int is_copy = ctx->resample && vol == ctx->resample->cubic;
+    F.cover = zero_vis && !s->has_crop ? (is_copy ? full : vol) : NULL;
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
         /* the full volume's faces (index -0.5 and dims - 0.5) in the
@@ -373,6 +368,11 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
         F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : zero_vis ? lo_face : -INFINITY;
         F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : zero_vis ? hi_face : INFINITY;
         F.clip_hi_open[a] = cut_hi;
+        if (F.cover) { /* its voxels inside the faces (a level of the copy has some past them) */
+            const double lo = is_copy ? 0.0 : ceil(lo_face), hi = is_copy ? full->dims[a] - 1 : floor(hi_face);
+            F.cover_in0[a] = lo > 0.0 ? (int)lo : 0;
+            F.cover_in1[a] = hi < F.cover->dims[a] - 1 ? (int)hi : F.cover->dims[a] - 1;
+        }
     }
     int rebuilt = 0;
     if ((rc = vs_context_pool(ctx, s)) != VS_OK) goto fail;

@@ -270,14 +270,13 @@ void vs_tile_render(void *arg, int worker, int task)
             while (next_brick < nbr && first_sheet(F, ent, order[next_brick]) == opening)
                 vs_expand_brick(&ts, ent[order[next_brick++]], opening);
             const double tp = tr ? vs_now_ms() : 0.0;
+            const int os = (opening - kbase) % R;
             if (multi)
                 st->activate(&ts, opening, ring, bbox, R, kbase);
             else
-                vs_rasterize_sheet(&ts, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R]);
+                vs_rasterize_sheet(&ts, opening, ring[os], &bbox[os]);
             /* sheet `opening` is complete: no later voxel reaches it */
-            if (F->face_norm)
-                vs_face_norm_sheet(&t, opening, ring[(opening - kbase) % R], &bbox[(opening - kbase) % R], ch,
-                                   st->gradient_splats);
+            if (F->cover) vs_face_norm_sheet(&t, opening, ring[os], &bbox[os], ch, st->gradient_splats);
             const double t1 = vs_now_ms();
             ws->ms_rasterize += t1 - t0;
             if (tr) {
