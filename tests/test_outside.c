@@ -163,8 +163,6 @@ int main(void)
                       n, st.lod_level, st.resampled);
                 vs_image_free(&a);
             }
-        f.perspective_fov = 0.0;
-        f.ray_trilinear = f.ray_normalize = 0;
         f.pipeline = VS_PIPELINE_RAYCAST;
         f.ray_step = 0.05;
         vs_image ref = tu_render(ctx, tubes, &f, NULL);
