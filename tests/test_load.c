@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <time.h>
 #include <unistd.h>
+#include <bzlib.h>
 #include <zlib.h>
 
 #include <teem/nrrd.h>
@@ -331,6 +332,100 @@ static void test_nrrd(vs_context *ctx)
         }
         vs_volume_release(v);
     }
+}
+
+/* A header, then bzip2 streams of the given pieces of data (several
+ * streams: as pbzip2 writes them). */
+static void write_bz2(const char *path, const char *header, const void *data, size_t n, int streams)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f || fputs(header, f) < 0) exit(1);
+    for (int s = 0; s < streams; s++) {
+        const size_t a = n * (size_t)s / (size_t)streams, b = n * (size_t)(s + 1) / (size_t)streams;
+        unsigned cap = (unsigned)((b - a) * 101 / 100 + 700);
+        char *z = malloc(cap);
+        if (!z || BZ2_bzBuffToBuffCompress(z, &cap, (char *)data + a, (unsigned)(b - a), 9, 0, 0) != BZ_OK) exit(1);
+        if (fwrite(z, 1, cap, f) != cap) exit(1);
+        free(z);
+    }
+    fclose(f);
+}
+
+/* Data in several files (a %d template, a LIST), raw and bzip2, and bzip2
+ * data in the forms Teem writes and pbzip2 writes, big-endian, after a
+ * byte skip: each loads to the same samples. */
+static void test_nrrd_data_files(vs_context *ctx)
+{
+    char path[1100], hdr[512];
+    enum { N = NX * NY * NZ, SLICE = NX * NY };
+    static uint16_t u16[N];
+    static unsigned char be[2 * N];
+    for (int i = 0; i < N; i++) {
+        u16[i] = (uint16_t)(i * 977 + 5);
+        be[2 * i] = (unsigned char)(u16[i] >> 8);
+        be[2 * i + 1] = (unsigned char)(u16[i] & 255);
+    }
+    struct {
+        const char *name;
+        int bzip2;
+    } forms[] = {{"t_tmpl.nhdr", 0}, {"t_list.nhdr", 0}, {"t_tmpl_bz2.nhdr", 1}, {"t_list_bz2.nhdr", 1}};
+    for (int k = 0; k < 4; k++) {
+        const int list = k & 1, bz = forms[k].bzip2;
+        int n = snprintf(hdr, sizeof hdr,
+                         "NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\nendian: big\nencoding: %s\n", NX, NY,
+                         NZ, bz ? "bzip2" : "raw");
+        n += list ? snprintf(hdr + n, sizeof hdr - (size_t)n, "data file: LIST\n")
+                  : snprintf(hdr + n, sizeof hdr - (size_t)n, "data file: s%d_%%03d.dat %d 1 -1\n", k, NZ);
+        for (int z = 0; z < NZ; z++) { /* the template counts down: file NZ holds slice 0 */
+            char name[64];
+            snprintf(name, sizeof name, list ? "l%d_%d.dat" : "s%d_%03d.dat", k, list ? z : NZ - z);
+            if (list) n += snprintf(hdr + n, sizeof hdr - (size_t)n, "%s\n", name);
+            path_of(path, sizeof path, name);
+            if (bz) write_bz2(path, "", be + 2 * SLICE * z, 2 * SLICE, 1);
+            else tu_write_file(path, be + 2 * SLICE * z, 2 * SLICE);
+        }
+        path_of(path, sizeof path, forms[k].name);
+        tu_write_file(path, hdr, strlen(hdr));
+        vs_volume *v = load(ctx, path, NULL);
+        check_shape(v, forms[k].name, NX, NY, NZ, VS_U16, 1, 1, 1, 0);
+        if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "%s: data differ", forms[k].name);
+        vs_volume_release(v);
+    }
+    /* Teem's own bzip2 writer, attached and detached */
+    const char *names[] = {"t_bz2.nrrd", "t_bz2.nhdr"};
+    for (int k = 0; k < 2; k++) {
+        Nrrd *nr = nrrdNew();
+        CHECK(nrrdWrap_va(nr, u16, nrrdTypeUShort, 3, (size_t)NX, (size_t)NY, (size_t)NZ) == 0, "wrap");
+        NrrdIoState *nio = nrrdIoStateNew();
+        nio->encoding = nrrdEncodingBzip2;
+        path_of(path, sizeof path, names[k]);
+        CHECK(nrrdSave(path, nr, nio) == 0, "nrrdSave %s", path);
+        nrrdIoStateNix(nio);
+        nrrdNix(nr);
+        vs_volume *v = load(ctx, path, NULL);
+        check_shape(v, names[k], NX, NY, NZ, VS_U16, 1, 1, 1, 0);
+        if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "%s: data differ", names[k]);
+        vs_volume_release(v);
+    }
+    /* three concatenated streams after a byte skip of 6 decoded bytes,
+     * and trailing bytes after the last stream */
+    static unsigned char skipped[6 + 2 * N];
+    memcpy(skipped, "prefix", 6);
+    memcpy(skipped + 6, be, sizeof be);
+    snprintf(hdr, sizeof hdr,
+             "NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\nendian: big\nbyte skip: 6\nencoding: bzip2\n\n", NX,
+             NY, NZ);
+    path_of(path, sizeof path, "t_pbzip2.nrrd");
+    write_bz2(path, hdr, skipped, sizeof skipped, 3);
+    FILE *f = fopen(path, "ab");
+    if (f) {
+        fputs("trailing bytes", f);
+        fclose(f);
+    }
+    vs_volume *v = load(ctx, path, NULL);
+    check_shape(v, "t_pbzip2.nrrd", NX, NY, NZ, VS_U16, 1, 1, 1, 0);
+    if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "t_pbzip2.nrrd: data differ");
+    vs_volume_release(v);
 }
 
 static void test_raw_den(vs_context *ctx)
@@ -911,6 +1006,7 @@ int main(void)
     test_real(ctx);
     test_nifti(ctx);
     test_nrrd(ctx);
+    test_nrrd_data_files(ctx);
     test_raw_den(ctx);
     test_box(ctx);
     test_stacks(ctx);

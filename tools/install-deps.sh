@@ -10,7 +10,7 @@ fi
 PACKAGES=(
     build-essential gcc g++ make cmake pkg-config
     libopenimageio-dev openimageio-tools
-    libhwloc-dev libteem-dev libnifti2-dev zlib1g-dev
+    libhwloc-dev libteem-dev libnifti2-dev zlib1g-dev libbz2-dev
     libcjson-dev  # ParaView colour-map presets (--tf FILE.json)
     libgdcm-dev python3-pydicom  # DICOM series (the module); tests write series with pydicom
     mricron-data  # the Colin27 demo head (ch2.nii.gz)

@@ -11,6 +11,8 @@
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
+#include "nrrd_bzip2.h"
+#include "nrrd_data_files.h"
 #include "nrrd_header_check.h"
 
 #include <math.h>
@@ -48,21 +50,23 @@ static vs_status teem_error(vs_context *ctx, vs_status st, const char *path, con
 /* Bytes in the files that hold the data, or 0 if unknown. */
 static uint64_t data_bytes(const NrrdIoState *nio, uint64_t header_size)
 {
-    if (!nio->dataFNArr || nio->dataFNArr->len == 0) return header_size;
+    if (!nio->dataFNFormat && nio->dataFNArr->len == 0) return header_size;
+    const unsigned files = vs_nrrd_data_count(nio);
     uint64_t sum = 0;
-    for (unsigned i = 0; i < nio->dataFNArr->len; i++) {
-        const char *fn = nio->dataFN[i];
+    for (unsigned i = 0; i < files; i++) {
         char buf[4096];
         struct stat st;
-        if (!fn) return 0;
-        if (fn[0] != '/' && nio->path && *nio->path)
-            snprintf(buf, sizeof buf, "%s/%s", nio->path, fn);
-        else
-            snprintf(buf, sizeof buf, "%s", fn);
-        if (stat(buf, &st) != 0) return 0;
+        if (!vs_nrrd_data_path(nio, i, buf, sizeof buf) || stat(buf, &st) != 0) return 0;
         sum += (uint64_t)st.st_size;
     }
     return sum;
+}
+
+/* The data file Teem leaves open (nrrdIoStateKeepNrrdDataFileOpen). */
+static void close_kept(NrrdIoState *nio)
+{
+    if (nio && nio->dataFile) fclose(nio->dataFile);
+    if (nio) nio->dataFile = NULL;
 }
 
 static double nrrd_value(const void *p, int type, size_t i)
@@ -133,6 +137,7 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
         goto done;
     }
     nrrdIoStateSet(nio, nrrdIoStateSkipData, AIR_TRUE);
+    nrrdIoStateSet(nio, nrrdIoStateKeepNrrdDataFileOpen, AIR_TRUE); /* for bzip2 data */
     if (nrrdLoad(nrrd, path, nio)) {
         st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD header");
         goto done;
@@ -176,18 +181,25 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
         }
     }
 
-    /* Now the real read. */
-    nrrdIoStateNix(nio);
-    nio = nrrdIoStateNew();
-    nrrdNuke(nrrd);
-    nrrd = nrrdNew();
-    if (!nrrd || !nio) {
-        st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
-        goto done;
-    }
-    if (nrrdLoad(nrrd, path, nio)) {
-        st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD");
-        goto done;
+    /* Now the data: bzip2 decoded here (nrrd_bzip2.c says why), the rest
+     * by Teem in a second read. */
+    if (enc == nrrdEncodingBzip2) {
+        st = vs_nrrd_read_bzip2(ctx, path, nrrd, nio);
+        if (st != VS_OK) goto done;
+    } else {
+        close_kept(nio);
+        nrrdIoStateNix(nio);
+        nio = nrrdIoStateNew();
+        nrrdNuke(nrrd);
+        nrrd = nrrdNew();
+        if (!nrrd || !nio) {
+            st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+            goto done;
+        }
+        if (nrrdLoad(nrrd, path, nio)) {
+            st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD");
+            goto done;
+        }
     }
     /* The file could have changed between the reads; check again. */
     int dims[3];
@@ -228,6 +240,7 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
     }
     st = VS_OK;
 done:
+    close_kept(nio);
     if (nio) nrrdIoStateNix(nio);
     if (nrrd) nrrdNuke(nrrd);
     if (st != VS_OK) {

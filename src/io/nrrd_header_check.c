@@ -15,11 +15,21 @@
  *  - "labels", "units" or "space units" as the file's last line without a
  *    newline: Teem may cut such a line short, and the string it cuts is
  *    unterminated (leaked as above).
+ * A "data file" template ("slice%03d.raw <min> <max> <step>") goes to
+ * sprintf as the format and to a loop over its numbers, unchecked, so it is
+ * refused unless its only conversion is one %d of width at most 10
+ * (another conversion reads or writes through a stray pointer; a wider one
+ * overruns Teem's name buffer) and the loop ends without overflowing int
+ * (it would never end).  Teem reads a name as a template by the same test
+ * as `template_at` below.
+ * A data file named "-" is standard input to Teem: a volume file must not
+ * read its host program's input, nor wait on a terminal.
  * The header is the lines up to the first empty line (or the whole file,
  * for a detached .nhdr), each ended by "\n", "\r\n" or "\r". */
 #include "nrrd_header_check.h"
 
 #include <ctype.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -57,6 +67,51 @@ static int quoted_strings(const char *s)
     }
 }
 
+/* Whether Teem takes a "data file" value as a %d template: its first
+ * '%' that is not "%%" is followed by digits and 'd'. */
+static int template_at(const char *info)
+{
+    const char *p = info;
+    while ((p = strchr(p, '%')) && p[1] == '%') p += 2;
+    if (!p || !p[1]) return 0;
+    p += 1 + strspn(p + 1, "0123456789");
+    return *p == 'd';
+}
+
+/* NULL if the template is safe to hand to Teem, else why not. */
+static const char *template_problem(const char *info)
+{
+    const size_t len = strcspn(info, " \t"); /* the template is the first word */
+    int convs = 0;
+    for (size_t i = 0; i < len; i++) {
+        if (info[i] != '%') continue;
+        if (i + 1 < len && info[i + 1] == '%') {
+            i++;
+            continue;
+        }
+        size_t j = i + 1, width = 0;
+        for (; j < len && isdigit((unsigned char)info[j]); j++)
+            if ((width = width * 10 + (size_t)(info[j] - '0')) > 10) return "a %d wider than 10";
+        if (j >= len || info[j] != 'd') return "a conversion other than %d";
+        convs++;
+        i = j;
+    }
+    if (convs != 1) return "more than one %d";
+    long num[3];
+    char *end;
+    const char *p = info + len;
+    for (int k = 0; k < 3; k++) {
+        num[k] = strtol(p, &end, 10);
+        if (end == p) return NULL; /* Teem refuses it without looping */
+        p = end;
+    }
+    const long min = num[0], max = num[1], step = num[2];
+    if (min < INT_MIN || min > INT_MAX || max < INT_MIN || max > INT_MAX || step < INT_MIN || step > INT_MAX ||
+        (step > 0 && max > INT_MAX - step) || (step < 0 && max < INT_MIN - step))
+        return "file numbers that overflow an int";
+    return NULL;
+}
+
 /* Dimensions of a named space: the "-time"/"...T" spaces have 4. */
 static int space_dim(const char *name)
 {
@@ -75,8 +130,19 @@ static const char *spelled(const char *name)
     return name;
 }
 
-static vs_status check_line(vs_context *ctx, const char *path, const char *line, int last, int *dim, int *sdim)
+static vs_status check_line(vs_context *ctx, const char *path, const char *line, int last, int *dim, int *sdim,
+                            int *list)
 {
+    if (*list) { /* a name in a data file LIST ("<skip> <name>" in a SKIPLIST), not a field */
+        const char *fn = line;
+        if (*list == 2) {
+            fn += strspn(fn, " \t");
+            fn += strcspn(fn, " \t");
+            fn += strspn(fn, " \t");
+        }
+        if (strcmp(fn, "-")) return VS_OK;
+        return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD data file \"-\" (standard input) is not supported", path);
+    }
     char name[64];
     field_name(line, name, sizeof name);
     if (!*name) return VS_OK;
@@ -96,6 +162,14 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
                                (strchr(info, '%') || !strncmp(info, "LIST", 4) || !strncmp(info, "SKIPLIST", 8))))) {
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path,
                             spelled(name));
+    }
+    if (!strcmp(name, "datafile")) {
+        if (!strcmp(info, "-"))
+            return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD data file \"-\" (standard input) is not supported",
+                                path);
+        const char *why = template_at(info) ? template_problem(info) : NULL;
+        if (why) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD data file template with %s", path, why);
+        *list = !strncmp(info, "LIST", 4) ? 1 : !strncmp(info, "SKIPLIST", 8) ? 2 : 0;
     }
     if (!strcmp(name, "labels") || !strcmp(name, "units") || !strcmp(name, "spaceunits")) {
         int n = quoted_strings(info);
@@ -121,7 +195,7 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     vs_status st = VS_OK;
-    int dim = 0, sdim = 0, first = 1;
+    int dim = 0, sdim = 0, list = 0, first = 1;
     for (;;) {
         size_t n = 0;
         int c;
@@ -146,8 +220,8 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
         }
         if (st != VS_OK) break;
         line[n] = '\0';
-        if (n == 0 && c != EOF) break; /* end of the header */
-        if (!first) st = check_line(ctx, path, line, c == EOF, &dim, &sdim);
+        if (n == 0 && c != EOF) break; /* end of the header (and of a LIST) */
+        if (!first) st = check_line(ctx, path, line, c == EOF, &dim, &sdim, &list);
         first = 0;
         if (st != VS_OK || c == EOF) break;
     }

@@ -1,5 +1,5 @@
-/* NRRD header lines that Teem 1.12's parser leaks on, refused before Teem
- * reads the file (nrrd_header_check.c). */
+/* NRRD header lines that Teem 1.12 leaks on or mishandles, refused before
+ * Teem reads the file (nrrd_header_check.c). */
 #ifndef VS_NRRD_HEADER_CHECK_H
 #define VS_NRRD_HEADER_CHECK_H
 
