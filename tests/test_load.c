@@ -426,6 +426,39 @@ static void test_nrrd_data_files(vs_context *ctx)
     check_shape(v, "t_pbzip2.nrrd", NX, NY, NZ, VS_U16, 1, 1, 1, 0);
     if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "t_pbzip2.nrrd: data differ");
     vs_volume_release(v);
+    /* "byte skip: -N-1": the data end N bytes before the decoded end (here
+     * after a prefix, and before a 2-byte trailer), as gzip members, as
+     * bzip2 streams, and as plain bytes labelled gzip (zlib's transparent
+     * mode, as Teem reads them) */
+    static unsigned char framed[6 + 2 * N + 2];
+    memcpy(framed, "prefix", 6);
+    memcpy(framed + 6, be, sizeof be);
+    memcpy(framed + 6 + 2 * N, "tr", 2);
+    const char *skip_names[] = {"t_gz_tail.nrrd", "t_bz2_tail.nrrd", "t_gz_plain_tail.nrrd"};
+    for (int k = 0; k < 3; k++) {
+        snprintf(hdr, sizeof hdr,
+                 "NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\nendian: big\nbyte skip: -3\nencoding: %s\n\n",
+                 NX, NY, NZ, k == 1 ? "bzip2" : "gzip");
+        path_of(path, sizeof path, skip_names[k]);
+        if (k == 1) {
+            write_bz2(path, hdr, framed, sizeof framed, 2);
+        } else {
+            f = fopen(path, "wb");
+            if (!f || fputs(hdr, f) < 0) exit(1);
+            if (k == 2 && fwrite(framed, 1, sizeof framed, f) != sizeof framed) exit(1);
+            fclose(f);
+            for (int m = 0; k == 0 && m < 2; m++) { /* two gzip members */
+                gzFile g = gzopen(path, "ab");
+                const size_t a = m ? 100 : 0, b = m ? sizeof framed : 100;
+                if (!g || gzwrite(g, framed + a, (unsigned)(b - a)) != (int)(b - a)) exit(1);
+                gzclose(g);
+            }
+        }
+        v = load(ctx, path, NULL);
+        check_shape(v, skip_names[k], NX, NY, NZ, VS_U16, 1, 1, 1, 0);
+        if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "%s: data differ", skip_names[k]);
+        vs_volume_release(v);
+    }
 }
 
 static void test_raw_den(vs_context *ctx)

@@ -11,7 +11,7 @@
 #include "context.h"
 #include "load.h"
 #include "load_common.h"
-#include "nrrd_bzip2.h"
+#include "nrrd_compressed.h"
 #include "nrrd_data_files.h"
 #include "nrrd_header_check.h"
 
@@ -137,7 +137,7 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
         goto done;
     }
     nrrdIoStateSet(nio, nrrdIoStateSkipData, AIR_TRUE);
-    nrrdIoStateSet(nio, nrrdIoStateKeepNrrdDataFileOpen, AIR_TRUE); /* for bzip2 data */
+    nrrdIoStateSet(nio, nrrdIoStateKeepNrrdDataFileOpen, AIR_TRUE); /* for compressed data */
     if (nrrdLoad(nrrd, path, nio)) {
         st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD header");
         goto done;
@@ -181,10 +181,10 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
         }
     }
 
-    /* Now the data: bzip2 decoded here (nrrd_bzip2.c says why), the rest
-     * by Teem in a second read. */
-    if (enc == nrrdEncodingBzip2) {
-        st = vs_nrrd_read_bzip2(ctx, path, nrrd, nio);
+    /* Now the data: gzip and bzip2 decoded here (nrrd_compressed.c says
+     * why), the rest by Teem in a second read. */
+    if (enc == nrrdEncodingGzip || enc == nrrdEncodingBzip2) {
+        st = vs_nrrd_read_compressed(ctx, path, nrrd, nio);
         if (st != VS_OK) goto done;
     } else {
         close_kept(nio);
