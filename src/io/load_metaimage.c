@@ -305,7 +305,11 @@ static vs_status read_voxels(vs_context *ctx, const char *path, const meta *m, v
                             data_path, (unsigned long long)need, (unsigned long long)avail);
     FILE *f = fopen(data_path, "rb");
     if (!f) return vs_set_error(ctx, VS_ERR_IO, "%s: cannot open: %s", data_path, strerror(errno));
-    unsigned char *buf = malloc(need ? (size_t)need : 1);
+    /* Elements of the volume's own type are read into it (no second copy
+     * of the data), others through a buffer and converted. */
+    const int own = m->elem == vs_type_size(v->type) &&
+                    (v->type == VS_F32 ? m->kind == 2 : m->kind == (v->type == VS_I16 ? 1 : 0));
+    unsigned char *buf = own ? v->data : malloc(need ? (size_t)need : 1);
     if (!buf) {
         fclose(f);
         return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory for %llu bytes", data_path,
@@ -316,8 +320,17 @@ static vs_status read_voxels(vs_context *ctx, const char *path, const meta *m, v
     else if (fread(buf, 1, (size_t)need, f) != need)
         st = vs_set_error(ctx, VS_ERR_IO, "%s: cannot read %llu bytes", data_path, (unsigned long long)need);
     fclose(f);
-    if (st == VS_OK) convert(m, buf, v, n);
-    free(buf);
+    const uint16_t one = 1;
+    const int host_msb = *(const unsigned char *)&one == 0;
+    if (st == VS_OK && own && m->elem > 1 && m->msb != host_msb) /* the file's byte order */
+        for (size_t i = 0; i < n; i++)
+            for (size_t k = 0; k < m->elem / 2; k++) {
+                unsigned char *e = buf + i * m->elem, t = e[k];
+                e[k] = e[m->elem - 1 - k];
+                e[m->elem - 1 - k] = t;
+            }
+    if (st == VS_OK && !own) convert(m, buf, v, n);
+    if (!own) free(buf);
     return st;
 }
 

@@ -85,6 +85,32 @@ static double nrrd_value(const void *p, int type, size_t i)
     }
 }
 
+/* The volume's type for a NRRD type: other types become f32. */
+static vs_type type_of(int nrrd_type)
+{
+    switch (nrrd_type) {
+    case nrrdTypeUChar: return VS_U8;
+    case nrrdTypeShort: return VS_I16;
+    case nrrdTypeUShort: return VS_U16;
+    default: return VS_F32;
+    }
+}
+
+/* Spacing per axis: axis spacing or the length of the space direction, else 1. */
+static void spacing_of(const Nrrd *nrrd, double spacing[3])
+{
+    spacing[0] = spacing[1] = spacing[2] = 1.0;
+    for (unsigned a = 0; a < nrrd->dim && a < 3; a++) {
+        double sp = NAN, vec[NRRD_SPACE_DIM_MAX];
+        int ss = nrrdSpacingCalculate(nrrd, a, &sp, vec);
+        if (ss == nrrdSpacingStatusScalarNoSpace || ss == nrrdSpacingStatusScalarWithSpace ||
+            ss == nrrdSpacingStatusDirection) {
+            sp = fabs(sp);
+            if (sp > 0.0 && isfinite(sp)) spacing[a] = sp;
+        }
+    }
+}
+
 static void set_orientation(vs_volume *v, const Nrrd *nrrd)
 {
     double flip[3] = {1, 1, 1};
@@ -181,67 +207,60 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
         }
     }
 
-    /* Now the data: gzip and bzip2 decoded here (nrrd_compressed.c says
-     * why), the rest by Teem in a second read. */
-    if (enc == nrrdEncodingGzip || enc == nrrdEncodingBzip2) {
+    /* The volume first, so that the data go straight into it where the
+     * file's type is the volume's: Teem reuses a buffer of the right size
+     * (nrrdWrap before nrrdLoad), the gzip and bzip2 reader writes into
+     * nrrd->data.  Other types are read by Teem and converted. */
+    int dims[3];
+    for (int a = 0; a < 3; a++) dims[a] = (int)d[a];
+    double spacing[3];
+    spacing_of(nrrd, spacing);
+    const int file_type = nrrd->type, in_place = type_of(file_type) != VS_F32 || file_type == nrrdTypeFloat;
+    st = vs_load_alloc(ctx, path, type_of(file_type), dims, spacing, &v);
+    if (st != VS_OK) goto done;
+    if (enc == nrrdEncodingGzip || enc == nrrdEncodingBzip2) { /* nrrd_compressed.c says why */
+        if (in_place) nrrd->data = v->data;
         st = vs_nrrd_read_compressed(ctx, path, nrrd, nio);
         if (st != VS_OK) goto done;
-    } else {
+    } else { /* a second read, by Teem */
         close_kept(nio);
         nrrdIoStateNix(nio);
         nio = nrrdIoStateNew();
         nrrdNuke(nrrd);
         nrrd = nrrdNew();
-        if (!nrrd || !nio) {
+        size_t sizes[3] = {(size_t)d[0], (size_t)d[1], (size_t)d[2]};
+        if (!nrrd || !nio || (in_place && nrrdWrap_nva(nrrd, v->data, file_type, 3, sizes))) {
             st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
             goto done;
         }
-        if (nrrdLoad(nrrd, path, nio)) {
+        const int failed = nrrdLoad(nrrd, path, nio);
+        /* On success Teem frees a buffer it did not reuse: the sizes
+         * changed, and the check below says so. */
+        if (in_place && !failed && nrrd->data != v->data) v->data = NULL;
+        if (failed) {
             st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD");
             goto done;
         }
     }
     /* The file could have changed between the reads; check again. */
-    int dims[3];
     for (unsigned a = 0; a < 3; a++) {
         size_t n = a < nrrd->dim ? nrrd->axis[a].size : 1;
-        if ((int64_t)n != d[a] || !nrrd->data || nrrdTypeSize[nrrd->type] != elem) {
+        if ((int64_t)n != d[a] || !nrrd->data || !v->data || nrrd->type != file_type) {
             st = vs_set_error(ctx, VS_ERR_IO, "%s: file changed while reading", path);
             goto done;
         }
-        dims[a] = (int)n;
     }
-    double spacing[3] = {1.0, 1.0, 1.0};
-    for (unsigned a = 0; a < nrrd->dim; a++) {
-        double sp = NAN, vec[NRRD_SPACE_DIM_MAX];
-        int ss = nrrdSpacingCalculate(nrrd, a, &sp, vec);
-        if (ss == nrrdSpacingStatusScalarNoSpace || ss == nrrdSpacingStatusScalarWithSpace ||
-            ss == nrrdSpacingStatusDirection) {
-            sp = fabs(sp);
-            if (sp > 0.0 && isfinite(sp)) spacing[a] = sp;
-        }
-    }
-    vs_type type;
-    switch (nrrd->type) {
-    case nrrdTypeUChar: type = VS_U8; break;
-    case nrrdTypeShort: type = VS_I16; break;
-    case nrrdTypeUShort: type = VS_U16; break;
-    default: type = VS_F32; break;
-    }
-    st = vs_load_alloc(ctx, path, type, dims, spacing, &v);
-    if (st != VS_OK) goto done;
     set_orientation(v, nrrd);
-    size_t n = (size_t)dims[0] * dims[1] * dims[2];
-    if (type != VS_F32 || nrrd->type == nrrdTypeFloat) {
-        memcpy(v->data, nrrd->data, n * elem);
-    } else {
+    if (!in_place) {
+        const size_t n = (size_t)dims[0] * dims[1] * dims[2];
         float *f = v->data;
-        for (size_t i = 0; i < n; i++) f[i] = (float)nrrd_value(nrrd->data, nrrd->type, i);
+        for (size_t i = 0; i < n; i++) f[i] = (float)nrrd_value(nrrd->data, file_type, i);
     }
     st = VS_OK;
 done:
     close_kept(nio);
     if (nio) nrrdIoStateNix(nio);
+    if (nrrd && v && nrrd->data == v->data) nrrd->data = NULL; /* the volume's */
     if (nrrd) nrrdNuke(nrrd);
     if (st != VS_OK) {
         vs_volume_release(v);

@@ -176,7 +176,7 @@ vs_status vs_nrrd_read_compressed(vs_context *ctx, const char *path, Nrrd *nrrd,
     if (nio->byteSkip > SKIP_MAX || nio->byteSkip < -TAIL_MAX - 1)
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: byte skip %ld with %s data (%ld to %ld)", path, nio->byteSkip,
                             nio->encoding->name, -TAIL_MAX - 1, SKIP_MAX);
-    unsigned char *data = calloc(total ? total : 1, elem);
+    unsigned char *data = nrrd->data ? nrrd->data : calloc(total ? total : 1, elem);
     if (!data) return vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     const size_t piece = total / files * elem;
     for (unsigned i = 0; i < files; i++) {
@@ -201,7 +201,7 @@ vs_status vs_nrrd_read_compressed(vs_context *ctx, const char *path, Nrrd *nrrd,
         }
         if (f) fclose(f);
         if (why) {
-            free(data);
+            if (data != nrrd->data) free(data);
             if (files == 1) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: %s", path, why);
             return vs_set_error(ctx, VS_ERR_FORMAT, "%s: data file %u of %u (%s): %s", path, i + 1, files, name, why);
         }
