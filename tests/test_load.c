@@ -426,6 +426,50 @@ static void test_nrrd_data_files(vs_context *ctx)
     check_shape(v, "t_pbzip2.nrrd", NX, NY, NZ, VS_U16, 1, 1, 1, 0);
     if (v) CHECK(memcmp(vs_volume_data(v), u16, sizeof u16) == 0, "t_pbzip2.nrrd: data differ");
     vs_volume_release(v);
+    /* a line skip before compressed data: in the one data file Teem
+     * leaves open, and in each file of a template; and a 2-D NRRD, read
+     * into the volume in place */
+    for (int k = 0; k < 3; k++) {
+        const char *name = k == 0 ? "t_lines_gz.nhdr" : k == 1 ? "t_lines_tmpl.nhdr" : "t_2d.nrrd";
+        if (k == 0) {
+            snprintf(hdr, sizeof hdr,
+                     "NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\nendian: big\nline skip: 2\n"
+                     "encoding: gzip\ndata file: t_lines.dat\n",
+                     NX, NY, NZ);
+            path_of(path, sizeof path, "t_lines.dat");
+            tu_write_file(path, "a line\nanother line\n", 20);
+            gzFile g = gzopen(path, "ab");
+            if (!g || gzwrite(g, be, sizeof be) != (int)sizeof be) exit(1);
+            gzclose(g);
+        } else if (k == 1) {
+            snprintf(hdr, sizeof hdr,
+                     "NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\nendian: big\nline skip: 1\n"
+                     "encoding: bzip2\ndata file: t_lines_%%d.dat 0 %d 1\n",
+                     NX, NY, NZ, NZ - 1);
+            for (int z = 0; z < NZ; z++) {
+                char name_z[64];
+                snprintf(name_z, sizeof name_z, "t_lines_%d.dat", z);
+                path_of(path, sizeof path, name_z);
+                write_bz2(path, "slice header line\n", be + 2 * SLICE * z, 2 * SLICE, 1);
+            }
+        } else {
+            snprintf(hdr, sizeof hdr, "NRRD0004\ntype: ushort\ndimension: 2\nsizes: %d %d\nendian: big\nencoding: raw\n\n",
+                     NX, NY);
+        }
+        path_of(path, sizeof path, name);
+        if (k == 2) {
+            f = fopen(path, "wb");
+            if (!f || fputs(hdr, f) < 0 || fwrite(be, 1, 2 * SLICE, f) != 2 * SLICE) exit(1);
+            fclose(f);
+        } else {
+            tu_write_file(path, hdr, strlen(hdr));
+        }
+        vs_volume *w = load(ctx, path, NULL);
+        check_shape(w, name, NX, NY, k == 2 ? 1 : NZ, VS_U16, 1, 1, 1, 0);
+        if (w)
+            CHECK(memcmp(vs_volume_data(w), u16, (k == 2 ? SLICE : N) * sizeof *u16) == 0, "%s: data differ", name);
+        vs_volume_release(w);
+    }
     /* "byte skip: -N-1": the data end N bytes before the decoded end (here
      * after a prefix, and before a 2-byte trailer), as gzip members, as
      * bzip2 streams, and as plain bytes labelled gzip (zlib's transparent

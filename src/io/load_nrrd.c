@@ -1,6 +1,7 @@
 /* NRRD (.nrrd, .nhdr + detached data) through Teem.  The header is read
- * first without data, so absurd sizes are refused before Teem allocates;
- * then the whole file is loaded.  uchar/short/ushort/float keep their type,
+ * first without data, so absurd sizes are refused before anything is
+ * allocated; then the volume is allocated and the data read into it: by
+ * Teem, or for gzip and bzip2 by nrrd_compressed.c.  uchar/short/ushort/float keep their type,
  * other scalar types become f32.  Spacing per axis from nrrdSpacingCalculate
  * (axis spacing, or the length of the space direction), else 1.
  * Orientation from an anatomical `space` (RAS, LAS, LPS, or one of them
@@ -165,6 +166,9 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
     nrrdIoStateSet(nio, nrrdIoStateSkipData, AIR_TRUE);
     nrrdIoStateSet(nio, nrrdIoStateKeepNrrdDataFileOpen, AIR_TRUE); /* for compressed data */
     if (nrrdLoad(nrrd, path, nio)) {
+        /* data after the header: the file kept open was the header's,
+         * which nrrdLoad has closed on its way out */
+        if (!nio->dataFNFormat && nio->dataFNArr->len == 0) nio->dataFile = NULL;
         st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD header");
         goto done;
     }
@@ -233,10 +237,12 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
             st = vs_set_error(ctx, VS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
             goto done;
         }
+        /* Teem frees a buffer it did not reuse (the sizes changed: the
+         * check below says so) and clears nio->oldData, even if it fails
+         * afterwards; set here in case it fails before looking. */
+        nio->oldData = in_place ? v->data : NULL;
         const int failed = nrrdLoad(nrrd, path, nio);
-        /* On success Teem frees a buffer it did not reuse: the sizes
-         * changed, and the check below says so. */
-        if (in_place && !failed && nrrd->data != v->data) v->data = NULL;
+        if (in_place && nrrd->data != v->data && !nio->oldData) v->data = NULL;
         if (failed) {
             st = teem_error(ctx, VS_ERR_FORMAT, path, "cannot read NRRD");
             goto done;

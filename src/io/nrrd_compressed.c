@@ -156,6 +156,10 @@ static const char *read_piece(stream *s, long skip, unsigned char *dst, size_t n
         why = stream_read(s, ring + at, ring_n - at, &got);
         total += got;
         if (why || got < ring_n - at) break;
+        if (total > ring_n + (size_t)SKIP_MAX) { /* bounded as a skip is */
+            why = "more than 1 GiB decoded before the data";
+            break;
+        }
     }
     if (!why && total < ring_n) why = SHORT;
     if (!why) { /* the oldest kept byte is at total % ring_n */

@@ -5,6 +5,7 @@
 #include "nrrd_data_files.h"
 
 #include <stdio.h>
+#include <string.h>
 
 unsigned vs_nrrd_data_count(const NrrdIoState *nio)
 {
@@ -17,10 +18,17 @@ unsigned vs_nrrd_data_count(const NrrdIoState *nio)
     return nio->dataFNArr->len ? nio->dataFNArr->len : 1;
 }
 
+/* Teem's test for a name relative to the header's folder: not "-", not
+ * absolute, not a Windows drive ("C:..."). */
+static int relative(const char *name)
+{
+    return strcmp(name, "-") && name[0] != '/' && (!name[0] || name[1] != ':');
+}
+
 int vs_nrrd_data_path(const NrrdIoState *nio, unsigned i, char *buf, size_t cap)
 {
     char name[4096];
-    int n;
+    int n, rel;
     if (nio->dataFNFormat) {
         const long long num = nio->dataFNMin + (long long)i * nio->dataFNStep;
 #if defined(__GNUC__)
@@ -31,13 +39,15 @@ int vs_nrrd_data_path(const NrrdIoState *nio, unsigned i, char *buf, size_t cap)
 #if defined(__GNUC__)
 #pragma GCC diagnostic pop
 #endif
+        rel = relative(nio->dataFNFormat); /* as Teem: the template decides */
     } else if (i < nio->dataFNArr->len && nio->dataFN[i]) {
         n = snprintf(name, sizeof name, "%s", nio->dataFN[i]);
+        rel = relative(name);
     } else {
         return 0;
     }
     if (n < 0 || (size_t)n >= sizeof name) return 0;
-    if (name[0] != '/' && nio->path && *nio->path)
+    if (rel && nio->path && *nio->path)
         n = snprintf(buf, cap, "%s/%s", nio->path, name);
     else
         n = snprintf(buf, cap, "%s", name);

@@ -19,14 +19,22 @@
  * sprintf as the format and to a loop over its numbers, unchecked, so it is
  * refused unless its only conversion is one %d of width at most 10
  * (another conversion reads or writes through a stray pointer; a wider one
- * overruns Teem's name buffer) and the loop ends without overflowing int
- * (it would never end).  Teem reads a name as a template by the same test
+ * overruns Teem's name buffer), its numbers and Teem's arithmetic on them
+ * fit an int (its loop would never end) and they name at most VS_MAX_DIM
+ * files (each count is a loop over them).  Teem reads a name as a template by the same test
  * as `template_at` below.
+ * An axis "kind" with a fixed size (a vector, colour or tensor: "3-vector",
+ * "RGB-color", ...) is not an axis of a scalar volume; refused before Teem
+ * reads on, which leaks when such a kind disagrees with "sizes".
  * A data file named "-" is standard input to Teem: a volume file must not
- * read its host program's input, nor wait on a terminal.
+ * read its host program's input, nor wait on a terminal.  A LIST's names
+ * run to the end of the file, empty lines included: an empty name is
+ * refused too (Teem reads past it and opens the header's folder).
  * The header is the lines up to the first empty line (or the whole file,
  * for a detached .nhdr), each ended by "\n", "\r\n" or "\r". */
 #include "nrrd_header_check.h"
+
+#include "vsplat.h"
 
 #include <ctype.h>
 #include <limits.h>
@@ -96,7 +104,7 @@ static const char *template_problem(const char *info)
         convs++;
         i = j;
     }
-    if (convs != 1) return "more than one %d";
+    if (convs != 1) return convs ? "more than one %d" : "no %d in its first word";
     long num[3];
     char *end;
     const char *p = info + len;
@@ -105,11 +113,32 @@ static const char *template_problem(const char *info)
         if (end == p) return NULL; /* Teem refuses it without looping */
         p = end;
     }
-    const long min = num[0], max = num[1], step = num[2];
+    const long long min = num[0], max = num[1], step = num[2];
     if (min < INT_MIN || min > INT_MAX || max < INT_MIN || max > INT_MAX || step < INT_MIN || step > INT_MAX ||
-        (step > 0 && max > INT_MAX - step) || (step < 0 && max < INT_MIN - step))
+        (step > 0 && max > INT_MAX - step) || (step < 0 && max < INT_MIN - step) || max - min > INT_MAX ||
+        min - max > INT_MAX || llabs((max - min) * step) > INT_MAX)
         return "file numbers that overflow an int";
+    /* Teem counts the files in loops, several times: bound the count */
+    if (step != 0 && (max - min) / step >= VS_MAX_DIM) return "more data files than a volume has slices";
     return NULL;
+}
+
+/* NULL if every axis kind in a "kinds" value can be an axis of a scalar
+ * volume, else the first that cannot. */
+static const char *kind_problem(const char *info, char *word, size_t cap)
+{
+    static const char *const ok[] = {"domain", "space", "time", "list", "point", "vector",
+                                     "covariant-vector", "normal", "???", "none"};
+    for (const char *p = info;;) {
+        p += strspn(p, " \t");
+        const size_t n = strcspn(p, " \t");
+        if (!n) return NULL;
+        snprintf(word, cap, "%.*s", (int)(n < cap ? n : cap - 1), p);
+        size_t k = 0;
+        while (k < sizeof ok / sizeof *ok && strcasecmp(word, ok[k])) k++;
+        if (k == sizeof ok / sizeof *ok) return word;
+        p += n;
+    }
 }
 
 /* Dimensions of a named space: the "-time"/"...T" spaces have 4. */
@@ -140,6 +169,7 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
             fn += strcspn(fn, " \t");
             fn += strspn(fn, " \t");
         }
+        if (!*fn) return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD data file LIST with an empty name", path);
         if (strcmp(fn, "-")) return VS_OK;
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD data file \"-\" (standard input) is not supported", path);
     }
@@ -162,6 +192,13 @@ static vs_status check_line(vs_context *ctx, const char *path, const char *line,
                                (strchr(info, '%') || !strncmp(info, "LIST", 4) || !strncmp(info, "SKIPLIST", 8))))) {
         return vs_set_error(ctx, VS_ERR_FORMAT, "%s: NRRD field \"%s\" before \"dimension\"", path,
                             spelled(name));
+    }
+    if (!strcmp(name, "kinds")) {
+        char word[64];
+        if (kind_problem(info, word, sizeof word))
+            return vs_set_error(ctx, VS_ERR_UNSUPPORTED,
+                                "%s: NRRD axis kind \"%s\": a vector, colour or tensor axis, not a scalar volume's",
+                                path, word);
     }
     if (!strcmp(name, "datafile")) {
         if (!strcmp(info, "-"))
@@ -220,7 +257,8 @@ vs_status vs_nrrd_header_check(vs_context *ctx, const char *path)
         }
         if (st != VS_OK) break;
         line[n] = '\0';
-        if (n == 0 && c != EOF) break; /* end of the header (and of a LIST) */
+        if (n == 0 && c != EOF && !list) break; /* end of the header; a LIST runs to the end of the file */
+        if (n == 0 && c == EOF) break;
         if (!first) st = check_line(ctx, path, line, c == EOF, &dim, &sdim, &list);
         first = 0;
         if (st != VS_OK || c == EOF) break;
