@@ -11,8 +11,9 @@
  * inside. */
 static double face_share(double t, int i0, int i1, double R, double *dshare)
 {
-    const int lo = (int)ceil(t - R), hi = (int)floor(t + R);
     if (dshare) *dshare = 0.0;
+    if (!(t + R >= i0 && t - R <= i1)) return 0.0; /* no voxel within R (and t fits an int below) */
+    const int lo = (int)ceil(t - R), hi = (int)floor(t + R);
     if (lo >= i0 && hi <= i1) return 1.0;
     double N = 0.0, D = 0.0, dN = 0.0, dD = 0.0;
     for (int i = lo; i <= hi; i++) {
@@ -51,7 +52,10 @@ static void interior_run(const double i0[3], const double di[3], const int *in0,
         if (xa > lo) lo = xa;
         if (xb < hi) hi = xb;
     }
-    /* rounded inwards, one pixel more each side for the affine step's rounding */
+    /* rounded inwards, one pixel more each side for the affine step's
+     * rounding; clamped first, as a near-parallel axis puts them far off */
+    lo = lo > x1 ? x1 : lo;
+    hi = hi < x0 - 1 ? x0 - 1 : hi > x1 ? x1 : hi;
     *a = (int)ceil(lo) + 1;
     *b = (int)floor(hi);
     if (*b < *a) *a = *b = x0;
