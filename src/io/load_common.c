@@ -80,6 +80,25 @@ uint64_t vs_load_gzread(gzFile gz, void *dst, uint64_t n)
     return got;
 }
 
+void vs_load_swap_bytes(void *data, size_t n, size_t elem)
+{
+    unsigned char *p = data;
+    if (elem == 2) {
+        for (size_t i = 0; i < n; i++, p += 2) {
+            const unsigned char t = p[0];
+            p[0] = p[1];
+            p[1] = t;
+        }
+        return;
+    }
+    for (size_t i = 0; i < n; i++, p += elem)
+        for (size_t a = 0, b = elem - 1; a < b; a++, b--) {
+            const unsigned char t = p[a];
+            p[a] = p[b];
+            p[b] = t;
+        }
+}
+
 vs_status vs_load_check_box(vs_context *ctx, const char *path, const vs_load_box *box, const int dims[3])
 {
     for (int a = 0; a < 3; a++)

@@ -41,6 +41,9 @@ vs_status vs_load_check_box(vs_context *ctx, const char *path, const vs_load_box
 vs_status vs_load_read_box(vs_context *ctx, const char *path, const char *file, uint64_t offset,
                            const int dims[3], size_t elem, const vs_load_box *box, void *dst);
 
+/* Reverses the byte order of n elements of elem bytes, in place. */
+void vs_load_swap_bytes(void *data, size_t n, size_t elem);
+
 /* vs_volume_alloc whose error message is prefixed with the path. */
 vs_status vs_load_alloc(vs_context *ctx, const char *path, vs_type type, const int dims[3],
                         const double spacing[3], vs_volume **out);

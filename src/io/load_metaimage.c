@@ -322,13 +322,7 @@ static vs_status read_voxels(vs_context *ctx, const char *path, const meta *m, v
     fclose(f);
     const uint16_t one = 1;
     const int host_msb = *(const unsigned char *)&one == 0;
-    if (st == VS_OK && own && m->elem > 1 && m->msb != host_msb) /* the file's byte order */
-        for (size_t i = 0; i < n; i++)
-            for (size_t k = 0; k < m->elem / 2; k++) {
-                unsigned char *e = buf + i * m->elem, t = e[k];
-                e[k] = e[m->elem - 1 - k];
-                e[m->elem - 1 - k] = t;
-            }
+    if (st == VS_OK && own && m->elem > 1 && m->msb != host_msb) vs_load_swap_bytes(buf, n, m->elem);
     if (st == VS_OK && !own) convert(m, buf, v, n);
     if (!own) free(buf);
     return st;

@@ -113,16 +113,6 @@ static vs_status peek_header(vs_context *ctx, const char *path, const char *hdr,
     return VS_OK;
 }
 
-static void swap_bytes(unsigned char *p, size_t n, int size)
-{
-    for (size_t i = 0; i < n; i++, p += size)
-        for (int a = 0, b = size - 1; a < b; a++, b--) {
-            unsigned char t = p[a];
-            p[a] = p[b];
-            p[b] = t;
-        }
-}
-
 /* The first `need` bytes of voxel data at `offset` of the (maybe gzip'd)
  * image file. */
 static vs_status read_voxels(vs_context *ctx, const char *path, const char *iname, uint64_t offset,
@@ -291,7 +281,7 @@ vs_status vs_load_nifti(vs_context *ctx, const char *path, vs_load_box *box, vs_
              : read_voxels(ctx, path, nim->iname, offset, need, direct ? v->data : tmp);
     if (st != VS_OK) goto done;
     if (nim->swapsize > 1 && nim->byteorder != nifti_short_order())
-        swap_bytes(direct ? v->data : tmp, (size_t)(need / (uint64_t)nim->swapsize), nim->swapsize);
+        vs_load_swap_bytes(direct ? v->data : tmp, (size_t)(need / (uint64_t)nim->swapsize), (size_t)nim->swapsize);
     if (!direct) {
         size_t n = (size_t)(need / (uint64_t)nim->nbyper);
         float *f = v->data;

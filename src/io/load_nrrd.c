@@ -66,8 +66,9 @@ static uint64_t data_bytes(const NrrdIoState *nio, uint64_t header_size)
 /* The data file Teem leaves open (nrrdIoStateKeepNrrdDataFileOpen). */
 static void close_kept(NrrdIoState *nio)
 {
-    if (nio && nio->dataFile) fclose(nio->dataFile);
-    if (nio) nio->dataFile = NULL;
+    if (!nio || !nio->dataFile) return;
+    fclose(nio->dataFile);
+    nio->dataFile = NULL;
 }
 
 static double nrrd_value(const void *p, int type, size_t i)
@@ -219,8 +220,10 @@ vs_status vs_load_nrrd(vs_context *ctx, const char *path, vs_volume **out)
     for (int a = 0; a < 3; a++) dims[a] = (int)d[a];
     double spacing[3];
     spacing_of(nrrd, spacing);
-    const int file_type = nrrd->type, in_place = type_of(file_type) != VS_F32 || file_type == nrrdTypeFloat;
-    st = vs_load_alloc(ctx, path, type_of(file_type), dims, spacing, &v);
+    const int file_type = nrrd->type;
+    const vs_type type = type_of(file_type);
+    const int in_place = type != VS_F32 || file_type == nrrdTypeFloat;
+    st = vs_load_alloc(ctx, path, type, dims, spacing, &v);
     if (st != VS_OK) goto done;
     if (enc == nrrdEncodingGzip || enc == nrrdEncodingBzip2) { /* nrrd_compressed.c says why */
         if (in_place) nrrd->data = v->data;

@@ -13,26 +13,6 @@
 #include <string.h>
 #include <zlib.h>
 
-static void swap_bytes(void *data, size_t n, size_t elem)
-{
-    unsigned char *p = data;
-    if (elem == 2) {
-        for (size_t i = 0; i < n; i++, p += 2) {
-            unsigned char t = p[0];
-            p[0] = p[1];
-            p[1] = t;
-        }
-    } else if (elem == 4) {
-        for (size_t i = 0; i < n; i++, p += 4) {
-            unsigned char t0 = p[0], t1 = p[1];
-            p[0] = p[3];
-            p[1] = p[2];
-            p[2] = t1;
-            p[3] = t0;
-        }
-    }
-}
-
 static vs_status read_plain(vs_context *ctx, const char *path, uint64_t fsize, uint64_t need,
                             void *dst)
 {
@@ -149,7 +129,7 @@ vs_status vs_load_raw(vs_context *ctx, const char *path, const int dims[3], vs_t
     }
     const uint16_t one = 1;
     vs_endian host = *(const unsigned char *)&one ? VS_ENDIAN_LITTLE : VS_ENDIAN_BIG;
-    if (endian != host && elem > 1) swap_bytes(v->data, (size_t)(need / elem), elem);
+    if (endian != host && elem > 1) vs_load_swap_bytes(v->data, (size_t)(need / elem), elem);
     *out = v;
     return VS_OK;
 }

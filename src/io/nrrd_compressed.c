@@ -14,6 +14,7 @@
  * in memory). */
 #include "nrrd_compressed.h"
 
+#include "load_common.h"
 #include "nrrd_data_files.h"
 
 #include <bzlib.h>
@@ -82,20 +83,16 @@ static void stream_close(stream *s)
  * data.  NULL, or what went wrong. */
 static const char *stream_read(stream *s, unsigned char *dst, size_t n, size_t *got)
 {
+    if (s->gzip) {
+        *got = vs_load_gzread(s->gz, dst, n);
+        int err = Z_OK;
+        if (*got < n) gzerror(s->gz, &err);
+        return err == Z_OK ? NULL : err == Z_BUF_ERROR ? "gzip data cut short" : "corrupt gzip data";
+    }
     *got = 0;
     while (*got < n) {
         const size_t want = n - *got > (size_t)INT_MAX / 2 ? (size_t)INT_MAX / 2 : n - *got;
         int k, err = BZ_OK;
-        if (s->gzip) {
-            k = gzread(s->gz, dst + *got, (unsigned)want);
-            if (k < 0) return "corrupt gzip data";
-            if (k == 0) {
-                gzerror(s->gz, &err);
-                return err == Z_BUF_ERROR ? "gzip data cut short" : NULL;
-            }
-            *got += (size_t)k;
-            continue;
-        }
         if (s->done) return NULL;
         if (!s->bz) {
             if (s->nkeep == 0) { /* nothing after a stream: the end */
