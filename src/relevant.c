@@ -380,6 +380,16 @@ vs_status vs_relevant_get_mode(vs_context *ctx, vs_relevant_cache **slot, struct
                                const struct vs_volume *vol, const vs_classify *c, int seam, int mode,
                                const vs_relevant_cache **out, int *rebuilt)
 {
+    /* A voxel left out reads as the value outside the volume, which lies
+     * below every range it is not inside.  Left out above a range's upper
+     * end, bright voxels would pull the reconstruction down through the
+     * range and draw a false surface inside them (a soft-tissue band's
+     * shell around every bone), so the post-classified pipelines keep
+     * them as if the range were open upwards; the list then serves every
+     * upper end. */
+    vs_classify open = *c;
+    if (seam > 0 && !(vs_volume_base(vol) > c->alpha_lo)) open.alpha_hi = INFINITY;
+    c = &open;
     vs_relevant_cache *rc = *slot;
     *rebuilt = 0;
     if (rc && rc->vol == vol && rc->serial == vol->serial && !memcmp(rc->dims, vol->dims, sizeof rc->dims) && rc->vmin == vol->vmin &&
