@@ -1,4 +1,5 @@
-/* The volume's faces when empty space is visible (face_cover.h). */
+/* The volume's faces when the fall-off to the value outside would show
+ * (face_cover.h). */
 #include "face_cover.h"
 #include "camera.h"
 #include "volume.h"
@@ -6,18 +7,20 @@
 #include <math.h>
 
 /* The share at index t of voxels i0..i1 in the 1-D lattice sum of the
- * kernel 2^(-2 u^2), |u| <= R, and its derivative in t (dshare may be
- * NULL).  Exactly 1 (derivative 0) where every lattice point within R lies
- * inside. */
-static double face_share(double t, int i0, int i1, double R, double *dshare)
+ * kernel 2^(-2 u^2), |u| <= R, u = (t - i) / f (f: the kernel's width in
+ * these voxels), and its derivative in t (dshare may be NULL).  Exactly 1
+ * (derivative 0) where every lattice point within R f lies inside. */
+static double face_share(double t, int i0, int i1, double R, double f, double *dshare)
 {
     if (dshare) *dshare = 0.0;
+    R *= f;
     if (!(t + R >= i0 && t - R <= i1)) return 0.0; /* no voxel within R (and t fits an int below) */
     const int lo = (int)ceil(t - R), hi = (int)floor(t + R);
     if (lo >= i0 && hi <= i1) return 1.0;
+    const double inv_f = 1.0 / f; /* 1 but for a level of the cubic copy */
     double N = 0.0, D = 0.0, dN = 0.0, dD = 0.0;
     for (int i = lo; i <= hi; i++) {
-        const double u = t - i, g = exp2(-2.0 * u * u), dg = -4.0 * M_LN2 * u * g;
+        const double u = (t - i) * inv_f, g = exp2(-2.0 * u * u), dg = -4.0 * M_LN2 * u * g * inv_f;
         D += g;
         dD += dg;
         if (i >= i0 && i <= i1) {
@@ -30,15 +33,15 @@ static double face_share(double t, int i0, int i1, double R, double *dshare)
     return N / D;
 }
 
-/* The pixels [*a, *b) of a row whose sheet points lie at least R inside
- * every face (shares exactly 1): idx_a(x) = i0[a] + x di[a], the voxels
- * inside [in0[a], in1[a]]. */
-static void interior_run(const double i0[3], const double di[3], const int *in0, const int *in1, double R, int x0,
-                         int x1, int *a, int *b)
+/* The pixels [*a, *b) of a row whose sheet points lie at least the
+ * kernel's reach R[a] inside every face (shares exactly 1): idx_a(x) =
+ * i0[a] + x di[a], the voxels inside [in0[a], in1[a]]. */
+static void interior_run(const double i0[3], const double di[3], const int *in0, const int *in1, const double R[3],
+                         int x0, int x1, int *a, int *b)
 {
     double lo = x0, hi = x1 - 1; /* real x range kept */
     for (int k = 0; k < 3; k++) {
-        const double u0 = in0[k] + R, u1 = in1[k] - R; /* idx in [u0, u1]: interior */
+        const double u0 = in0[k] + R[k], u1 = in1[k] - R[k]; /* idx in [u0, u1]: interior */
         if (di[k] == 0.0) {
             if (!(i0[k] >= u0 && i0[k] <= u1)) hi = lo - 1.0;
             continue;
@@ -68,9 +71,12 @@ void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, in
     const struct vs_volume *vol = F->vol, *cv = F->cover;
     const int *in0 = F->cover_in0, *in1 = F->cover_in1;
     const double R = F->s->kernel_radius, slab = F->fp.slab, z = (k + 0.5) * slab;
-    /* d(cover index) / d(splatted index), per axis */
-    double sc[3];
-    for (int a = 0; a < 3; a++) sc[a] = vol->spacing[a] / cv->spacing[a];
+    /* d(cover index) / d(splatted index), and the kernel's reach, per axis */
+    double sc[3], reach[3];
+    for (int a = 0; a < 3; a++) {
+        sc[a] = vol->spacing[a] / cv->spacing[a];
+        reach[a] = R * F->cover_scale[a];
+    }
     const int x0 = bb->x0 > 0 ? bb->x0 : 0, x1 = bb->x1 < t->bw ? bb->x1 : t->bw;
     const int y0 = bb->y0 > 0 ? bb->y0 : 0, y1 = bb->y1 < t->bh ? bb->y1 : t->bh;
     for (int y = y0; y < y1; y++) {
@@ -85,18 +91,22 @@ void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, in
             i0[a] = cv == vol ? i0[a] : vs_volume_index_in(vol, cv, a, i0[a]);
         }
         int ra, rb;
-        interior_run(i0, di, in0, in1, R, x0, x1, &ra, &rb);
+        interior_run(i0, di, in0, in1, reach, x0, x1, &ra, &rb);
         for (int x = x0; x < x1; x++) {
             if (x == ra && rb > ra) x = rb;
             if (x >= x1) break;
+            /* nothing splatted here (no relevant voxel reaches): nothing to divide */
+            float *p = buf + ((size_t)y * t->stride + x) * ch;
+            int any = 0;
+            for (int i = 0; i < ch; i++) any |= p[i] != 0.0f;
+            if (!any) continue;
             double c[3], dc[3], C = 1.0;
             for (int a = 0; a < 3; a++) {
-                c[a] = face_share(i0[a] + x * di[a], in0[a], in1[a], R, gs ? &dc[a] : NULL);
+                c[a] = face_share(i0[a] + x * di[a], in0[a], in1[a], R, F->cover_scale[a], gs ? &dc[a] : NULL);
                 C *= c[a];
             }
             /* inside, or so far out that nothing reaches (clipped anyway) */
             if (C >= 1.0 || C < 1e-3) continue;
-            float *p = buf + ((size_t)y * t->stride + x) * ch;
             const double inv = 1.0 / C;
             if (!gs) {
                 for (int i = 0; i < ch; i++) p[i] = (float)(p[i] * inv);

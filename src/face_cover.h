@@ -1,10 +1,12 @@
-/* The volume's faces when the transfer function makes empty space visible.
+/* The volume's faces when the fall-off to the value outside would show.
  *
  * Splatting's sum falls to the value outside the volume (vs_volume_base)
  * within the kernel's radius of a face, because fewer voxels reach there.
  * Where that value is visible (an iso-range that starts at the data's
- * minimum: dark membranes in electron microscopy, say), the fall-off is a
- * shell at every face, and sheets sample that thin shell as stripes.  So
+ * minimum: dark membranes in electron microscopy, say), or values lie above
+ * the range's upper end (a soft-tissue window around bone), the fall-off is
+ * a shell at every face they touch, and sheets sample that thin shell as
+ * stripes (vs_classify_faces).  So
  * there each sheet is divided by the share of the kernel's lattice sum that
  * the volume's voxels give (1 inside, 1/2 on a face): the reconstruction is
  * the kernel-weighted mean of the voxels that reach, extended to the faces,

@@ -76,14 +76,19 @@ typedef struct vs_frame {
      * reconstruction falls to the minimum (CT's air stays air) rather than
      * to 0, as the ray caster's does.  0 for pre-shaded splatting. */
     double base;
-    int clip_to_volume;              /* empty space is visible: pixels whose sheet
-                                        point lies outside the volume stay clear */
-    const struct vs_volume *cover;   /* empty space visible: sheets are divided
-                                        near the faces by this grid's voxels'
-                                        share (face_cover.h): the splatted one,
-                                        or for the cubic copy (which reaches
-                                        past the faces) the volume; else NULL  */
+    int clip_to_volume;              /* the faces would show (vs_classify_faces),
+                                        or a crop box: pixels whose sheet point
+                                        lies outside stay clear                */
+    const struct vs_volume *cover;   /* the faces would show: sheets are divided
+                                        near them by this grid's voxels' share
+                                        (face_cover.h): the splatted one, or for
+                                        the cubic copy and its levels (which
+                                        reach past the faces) the volume; else
+                                        NULL                                   */
     int cover_in0[3], cover_in1[3];  /* its voxels inside the volume's faces   */
+    double cover_scale[3];           /* the kernel's width in its voxels: a
+                                        level of the cubic copy reconstructs the
+                                        volume's field blurred to its spacing  */
     double clip_lo[3], clip_hi[3];   /* the box clip_to_volume keeps (index space) */
     int clip_hi_open[3];             /* 1: a point on clip_hi is outside (a crop
                                         face shared with the next brick)       */

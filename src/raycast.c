@@ -47,7 +47,7 @@ static double voxel(const struct vs_volume *v, int i, int j, int k, double base,
  * normalised (settings' ray_normalize), f(p) = sum_j f_j 2^(-2|p-j|^2) / W(p):
  * the weights a partition of unity, so the kernel's lattice ripple, which
  * the plain sum carries into the gradient in proportion to the value (not
- * to the slope), is gone.  With faces (empty space visible), near a face
+ * to the slope), is gone.  With faces (vs_classify_faces), near a face
  * the sum is divided by the voxels' share of the lattice sum, W_in / W
  * (normalised: W_in replaces W), as splatting divides its sheets
  * (face_cover.h) ---- */
@@ -437,7 +437,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
                                                      : MODE_GAUSS;
     J->base = J->mode == MODE_ANALYTIC ? 0.0 : vs_volume_base(vol);
     J->normalize = J->mode == MODE_GAUSS && s->ray_normalize;
-    J->faces = J->mode != MODE_ANALYTIC && vs_classify_value_visible(cls, J->base);
+    J->faces = J->mode != MODE_ANALYTIC && vs_classify_faces(cls, J->base, vol->vmax);
     J->R = s->kernel_radius;
     J->R2 = J->R * J->R;
     J->b = vs_kernel_b(J->R);
@@ -447,9 +447,10 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
         /* Sampled data reaches R beyond the outer voxels.  An analytic
          * function is defined everywhere; we cut it where the voxels end
          * (half a voxel beyond the outer ones, like the cube's edge) so that
-         * it describes the same finite object as the volume.  Where empty
-         * space is visible, sampled data is cut there too, as splatting's
-         * sheets are (face_cover.h). */
+         * it describes the same finite object as the volume.  Where the
+         * fall-off to the value outside would show (vs_classify_faces),
+         * sampled data is cut there too, as splatting's sheets are
+         * (face_cover.h). */
         double ext = J->mode == MODE_ANALYTIC || J->faces ? 0.5 : J->R;
         J->box_lo[a] = -ext;
         J->box_hi[a] = vol->dims[a] - 1 + ext;

@@ -25,7 +25,8 @@ typedef struct rc_job {
     vs_light light;
     int mode;
     int normalize;         /* Gaussian: weights over their lattice sum     */
-    int faces;             /* empty space visible (face_cover.h): samples
+    int faces;             /* the faces would show (vs_classify_faces,
+                              face_cover.h): samples
                               inside the volume's faces, reconstructed from
                               the voxels that reach alone                   */
     double R, R2, b;       /* kernel radius, its square, normalization      */

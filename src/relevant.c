@@ -427,4 +427,7 @@ vs_status vs_relevant_get_mode(vs_context *ctx, vs_relevant_cache **slot, struct
     return VS_OK;
 }
 
-int vs_classify_value_visible(const vs_classify *c, double v) { return vs_relevant_in_range(c, v); }
+int vs_classify_faces(const vs_classify *c, double base, double vmax)
+{
+    return vs_relevant_in_range(c, base) || (base < c->alpha_lo && vmax >= c->alpha_hi);
+}

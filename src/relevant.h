@@ -74,9 +74,12 @@ vs_status vs_relevant_get_mode(vs_context *ctx, vs_relevant_cache **slot, struct
                                const struct vs_volume *vol, const vs_classify *c, int seam, int mode,
                                const vs_relevant_cache **out, int *rebuilt);
 void vs_relevant_cache_free(vs_relevant_cache *rc);
-/* Does the classification give value v a non-zero opacity?  With v what
- * the volume reads outside (vs_volume_base), every voxel is relevant and
- * sheets are clipped to the volume. */
-int vs_classify_value_visible(const vs_classify *c, double v);
+/* Are the volume's faces cut, each sheet divided near them by the voxels'
+ * share (face_cover.h), for a volume reading base outside and reaching up
+ * to vmax?  When base is visible (then every voxel is relevant too), and
+ * when values lie above an upper end of the range: there the fall-off from
+ * them to base at a face passes through the range and would draw a wall on
+ * every face they touch (a soft-tissue window on a body cut by the scan). */
+int vs_classify_faces(const vs_classify *c, double base, double vmax);
 
 #endif

@@ -350,28 +350,34 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     int seam = s->seam >= 0 ? s->seam : (int)ceil(s->kernel_radius);
     if (s->pipeline == VS_PIPELINE_PRE && s->seam < 0) seam = 0;
     /* a crop face inside the volume clips; the volume's own faces clip only
-     * when empty space is visible, as without a crop box */
+     * when the fall-off to the value outside would show (vs_classify_faces),
+     * as without a crop box */
     F.base = s->pipeline == VS_PIPELINE_PRE ? 0.0 : vs_volume_base(full);
-    const int zero_vis = s->pipeline != VS_PIPELINE_PRE && vs_classify_value_visible(F.cls, F.base);
-    F.clip_to_volume = zero_vis || s->has_crop;
-    /* empty space visible: sheets divided near the faces by the share of
-     * the voxels inside them (face_cover.h); the cubic copy reaches past
-     * the faces, so the volume's own grid's */
-    const int is_copy = ctx->resample && vol == ctx->resample->cubic;
-    F.cover = zero_vis && !s->has_crop ? (is_copy ? full : vol) : NULL;
+    const int faces = s->pipeline != VS_PIPELINE_PRE && vs_classify_faces(F.cls, F.base, full->vmax);
+    F.clip_to_volume = faces || s->has_crop;
+    /* there sheets are divided near the faces by the share of the voxels
+     * inside them (face_cover.h); the cubic copy and its levels reach past
+     * the faces (their voxels there hold the fall-off), so the volume's own
+     * grid's, with the kernel as wide as the splatted grid's voxels */
+    int past = 0;
+    for (int a = 0; a < 3; a++)
+        past |= vs_volume_index_in(full, vol, a, -0.5) > 0.0 ||
+                vs_volume_index_in(full, vol, a, full->dims[a] - 0.5) < vol->dims[a] - 1;
+    F.cover = faces && !s->has_crop ? (past ? full : vol) : NULL;
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
         /* the full volume's faces (index -0.5 and dims - 0.5) in the
          * splatted volume's index (a level or the cubic copy) */
         const double lo_face = vs_volume_index_in(full, vol, a, -0.5);
         const double hi_face = vs_volume_index_in(full, vol, a, full->dims[a] - 0.5);
-        F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : zero_vis ? lo_face : -INFINITY;
-        F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : zero_vis ? hi_face : INFINITY;
+        F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : faces ? lo_face : -INFINITY;
+        F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : faces ? hi_face : INFINITY;
         F.clip_hi_open[a] = cut_hi;
-        if (F.cover) { /* its voxels inside the faces (a level of the copy has some past them) */
-            const double lo = is_copy ? 0.0 : ceil(lo_face), hi = is_copy ? full->dims[a] - 1 : floor(hi_face);
+        if (F.cover) { /* its voxels inside the faces */
+            const double lo = past ? 0.0 : ceil(lo_face), hi = past ? full->dims[a] - 1 : floor(hi_face);
             F.cover_in0[a] = lo > 0.0 ? (int)lo : 0;
             F.cover_in1[a] = hi < F.cover->dims[a] - 1 ? (int)hi : F.cover->dims[a] - 1;
+            F.cover_scale[a] = past ? fmax(1.0, vol->spacing[a] / full->spacing[a]) : 1.0;
         }
     }
     int rebuilt = 0;
