@@ -9,26 +9,68 @@
 #include "occlusion.h"
 #include "preintegrate.h"
 
-/* With a transfer function that makes value 0 visible, sheet pixels whose
- * slab centre lies outside the volume (where nothing was splatted, so q = 0)
- * must stay transparent, as they are for the ray caster; with a crop box,
- * those outside the box (another brick composites them). */
+#include <math.h>
+
+/* Where the fall-off to the value outside would show (vs_classify_faces),
+ * sheet pixels whose slab centre lies outside the volume must stay
+ * transparent, as they are for the ray caster; with a crop box, those
+ * outside the box (another brick composites them). */
+static inline int clip_inside(const vs_frame *F, const double idx[3])
+{
+    int inside = 1;
+    for (int a = 0; a < 3; a++)
+        inside &= idx[a] >= F->clip_lo[a] && (F->clip_hi_open[a] ? idx[a] < F->clip_hi[a] : idx[a] <= F->clip_hi[a]);
+    return inside;
+}
+
 static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
 {
     const vs_frame *F = t->F;
     const vs_camera *cam = &F->cam;
     const double z = (k + 0.5) * F->fp.slab;
-    const double *lo = F->clip_lo, *hi = F->clip_hi;
-    const int *open = F->clip_hi_open;
-    for (int y = r->y0; y < r->y1; y++)
+    for (int y = r->y0; y < r->y1; y++) {
+        if (r->xa[y] >= r->xb[y]) continue;
+        /* A sheet point's index is affine in x along a row (perspective
+         * too: the sheet's scale is one number).  The pixels more than two
+         * from where that line crosses a bound are inside without a test;
+         * the others are tested point by point, as the ray caster's and a
+         * neighbouring brick's tests are, so that rounding decides alike. */
+        double i0[3], i1[3];
+        const double v0[3] = {t->ox, y + t->oy, z}, v1[3] = {t->ox + 1.0, y + t->oy, z};
+        vs_camera_view_to_index(cam, v0, i0);
+        vs_camera_view_to_index(cam, v1, i1);
+        double lo = -INFINITY, hi = INFINITY; /* x where every bound holds */
+        for (int a = 0; a < 3; a++) {
+            const double di = i1[a] - i0[a];
+            if (di == 0.0) { /* near or past a bound: every pixel tested */
+                if (!(i0[a] > F->clip_lo[a] + 1e-6 && i0[a] < F->clip_hi[a] - 1e-6)) hi = -INFINITY;
+                continue;
+            }
+            double xa = (F->clip_lo[a] - i0[a]) / di, xb = (F->clip_hi[a] - i0[a]) / di;
+            if (xa > xb) {
+                const double sw = xa;
+                xa = xb;
+                xb = sw;
+            }
+            lo = xa > lo ? xa : lo; /* no NaN: the bounds are finite or infinite, di finite */
+            hi = xb < hi ? xb : hi;
+        }
+        /* clamped before converting (a near-parallel axis puts them far
+         * off); [ra, rb): two pixels or more inside every crossing */
+        lo = lo < r->xa[y] - 3 ? r->xa[y] - 3 : lo > r->xb[y] ? r->xb[y] : lo;
+        hi = hi > r->xb[y] + 3 ? r->xb[y] + 3 : hi < r->xa[y] - 1 ? r->xa[y] - 1 : hi;
+        int ra = (int)ceil(lo) + 2, rb = (int)floor(hi) - 1;
+        ra = ra < r->xa[y] ? r->xa[y] : ra;
+        rb = rb > r->xb[y] ? r->xb[y] : rb;
+        if (rb <= ra) ra = rb = r->xb[y];
         for (int x = r->xa[y]; x < r->xb[y]; x++) {
+            if (x == ra) x = rb;
+            if (x >= r->xb[y]) break;
             double v[3] = {x + t->ox, y + t->oy, z}, idx[3];
             vs_camera_view_to_index(cam, v, idx);
-            int inside = 1;
-            for (int a = 0; a < 3; a++)
-                inside &= idx[a] >= lo[a] && (open[a] ? idx[a] < hi[a] : idx[a] <= hi[a]);
-            if (!inside) alpha[vs_own(t, x, y)] = 0.0f;
+            if (!clip_inside(F, idx)) alpha[vs_own(t, x, y)] = 0.0f;
         }
+    }
 }
 
 /* Perspective, post-cd: sheet k's central differences are per pixel of
