@@ -363,7 +363,7 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     for (int a = 0; a < 3; a++)
         past |= vs_volume_index_in(full, vol, a, -0.5) > 0.0 ||
                 vs_volume_index_in(full, vol, a, full->dims[a] - 0.5) < vol->dims[a] - 1;
-    F.cover = faces && !s->has_crop ? (past ? full : vol) : NULL;
+    F.cover = faces ? (past ? full : vol) : NULL;
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
         /* the full volume's faces (index -0.5 and dims - 0.5) in the

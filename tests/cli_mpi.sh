@@ -110,17 +110,17 @@ fi
 
 render_all "cell perspective pre" --scene cell:256 --size 128x128 --view 200,40 --perspective 50 --pipeline pre
 
-# two_ranks_match DESC WHY ARGS...: vsplat-mpi on 2 ranks within 100 dB of
-# one process (WHY: what a shortfall means)
+# two_ranks_match DESC WHY ARGS...: vsplat-mpi on 2 ranks within 100 dB
+# (MIN_DB) of one process (WHY: what a shortfall means)
 two_ranks_match() {
-    local desc=$1 why=$2 line psnr
+    local desc=$1 why=$2 line psnr min=${MIN_DB:-100}
     shift 2
     run render "$@" --no-lod --resample off --threads 1 -q -o "$T/one.exr"
     mpi 2 "$@" --threads 1 --no-pin -q -o "$T/two.exr"
     line=$("$VSPLAT" compare "$T/one.exr" "$T/two.exr")
     psnr=$(sed -n 's/.*psnr=\([^ ]*\).*/\1/p' <<<"$line")
     echo "$desc N=2: $line"
-    if [[ $rc -eq 0 ]] && awk -v p="$psnr" 'BEGIN { exit !(p == "inf" || p >= 100) }'; then ok; else
+    if [[ $rc -eq 0 ]] && awk -v p="$psnr" -v m="$min" 'BEGIN { exit !(p == "inf" || p >= m) }'; then ok; else
         bad "$desc N=2: $why: $line"
     fi
 }
@@ -136,6 +136,14 @@ two_ranks_match "cell seen small" "ghost layers too thin for the four-point sten
 # and their ghost layers reach two sheets for it
 two_ranks_match "cell seen large" "the stencil across sheets not taken alike" \
     --scene cell:64 --size 160x160 --view 30,70
+# a translucent band with values above it that reach the volume's faces:
+# every rank divides its sheets near the faces as one process does (92.6
+# dB; the shares come out of each brick's own index frame, and a rounding
+# there can move a pre-integrated segment to the next table cell); when
+# bricks left that out, the faces drew walls: 17.7 dB here, and the EM
+# stack's membranes at --iso 0:60 14.2 dB
+MIN_DB=80 two_ranks_match "band to the faces" "the faces not divided in the bricks" \
+    --scene cell:64 --iso 20:80 --ramp 5 --opacity 0.3 --size 96x96 --view 30,20
 
 DATA=${VSPLAT_DATA:-${VSPLAT_SOURCE_DIR:-.}/../shared/data}
 HEAD=$DATA/colin27_ch2_mri_t1_head_181x217x181_u8.nii.gz
