@@ -60,6 +60,18 @@ static inline double vs_camera_sheet_scale(const vs_camera *cam, int k, double s
     const double z = (k + 0.5) * slab;
     return vs_camera_scale(cam, z > cam->near_z ? z : cam->near_z);
 }
+/* Perspective: the depth from which splatting composites and the ray
+ * caster samples, a whole number of slabs (view units).  Voxels whose
+ * kernel (radius R voxels) crosses the near plane are dropped
+ * (activate.c), so the sheets they reach, up to twice the kernel's depth
+ * extent past it, are incomplete; two more sheets, which gradients and
+ * pre-integration read, follow.  Orthographic: no limit. */
+static inline double vs_camera_near_cut(const vs_camera *cam, double R, double slab)
+{
+    if (!cam->persp) return -INFINITY;
+    const double rz = R * sqrt(cam->M[2][0] * cam->M[2][0] + cam->M[2][1] * cam->M[2][1] + cam->M[2][2] * cam->M[2][2]);
+    return (ceil((cam->near_z + 2.0 * rz) / slab) + 2.0) * slab;
+}
 /* The image box (x0, x1, y0, y1) covered by points whose depth-0 position
  * lies in [xo0, xo1] x [yo0, yo1] at depths in [z0, z1] (z0 >= near_z). */
 static inline void vs_camera_depth_box(const vs_camera *cam, double xo0, double xo1, double yo0, double yo1,

@@ -237,7 +237,7 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
     /* opacity per step: the ray's length per unit of depth */
     const double step_len = J->step * vs_camera_ray_length(cam, px, py);
     /* clip the ray against the sample box (slab test), in view-z units */
-    double t0 = cam->near_z, t1 = INFINITY;
+    double t0 = fmax(cam->near_z, vs_camera_near_cut(cam, J->R, s->slab)), t1 = INFINITY;
     int entry_axis = -1;
     for (int a = 0; a < 3; a++) {
         double d = dir[a];

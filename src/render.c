@@ -277,6 +277,10 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
     F.show0 = -(1 << 30);
     F.show1 = 1 << 30;
     if (band) vs_lod_band_sheets(band, F.cam.z_per_mm, F.fp.slab, &F.show0, &F.show1);
+    if (F.cam.persp) { /* the sheets near the near plane miss the voxels dropped there */
+        const int k0 = (int)lrint(vs_camera_near_cut(&F.cam, F.fp.R, F.fp.slab) / F.fp.slab);
+        if (k0 > F.show0) F.show0 = k0;
+    }
     F.under = under;
     {
         /* separable footprints go voxel at a time with footprint blocks

@@ -136,6 +136,26 @@ static vs_volume *disc_volume(int n)
     return v;
 }
 
+/* n^3 u8 tissue (150) with two crossing tubes (10, radius n/10, widening
+ * to n/6), the tubes through the faces. */
+static vs_volume *tubes_volume(int n)
+{
+    vs_volume *v;
+    int dims[3] = {n, n, n};
+    if (vs_volume_create(ctx, VS_U8, dims, NULL, &v) != VS_OK) return NULL;
+    uint8_t *d = vs_volume_data(v);
+    const double c = 0.5 * (n - 1);
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                const double r = fmin(hypot(j - c, k - c), hypot(i - c, j - c));
+                const double t = fmin(1.0, fmax(0.0, (r - n / 10.0) / (n / 16.0)));
+                d[((size_t)k * n + j) * n + i] = (uint8_t)lrint(10 + 140 * t);
+            }
+    vs_volume_update_range(v);
+    return v;
+}
+
 /* ------------------------------------------------------------ measuring */
 
 static int image_sane(const vs_image *img, char *why, size_t cap)
@@ -574,6 +594,32 @@ static void cases_thin(void)
     vs_volume_release(one);
 }
 
+/* The eye inside the volume: perspective 70 degrees, the volume 1.5 times
+ * the image width at its centre, a translucent band (the tubes' walls)
+ * with the tissue above it.  Voxels whose kernel crosses the near plane
+ * are dropped, so splatting composites from where its sheets are complete
+ * and the ray caster starts there too (vs_camera_near_cut); before, the
+ * incomplete sheets drew a wall at the near plane (post 12.3-13.0 dB).
+ * Measured (post, pre; 96^2 and quick 48^2): 40.2-42.9, 21.2-21.6.  Floors
+ * 3 dB under. */
+static void case_eye_inside(void)
+{
+    vs_volume *v = tubes_volume(48);
+    vs_settings s;
+    base_settings(&s);
+    s.has_iso = 1;
+    s.iso_lo = 50;
+    s.iso_hi = 100;
+    s.ramp = 10;
+    s.iso_opacity = 0.5f;
+    s.azimuth = 30;
+    s.elevation = 20;
+    s.perspective_fov = 70;
+    s.zoom = 1.5;
+    run_case("tubes 48^3, eye inside (perspective 70, zoom 1.5)", v, &s, REF_GAUSS, 37, 18, 0, "");
+    vs_volume_release(v);
+}
+
 /* Anisotropy 1:1:12.5 (like the EM stack): a 40 mm ball on 64x64x8 voxels
  * of 1 x 1 x 12.5 mm.  Footprints are ellipses 12.5 times longer in z and,
  * seen obliquely, sheared; the z ramp is under-sampled (2 mm ramp in a 12.5
@@ -704,6 +750,7 @@ int main(void)
     cases_zero_gradient();
     cases_thin();
     cases_aniso();
+    case_eye_inside();
     cases_values();
     case_outside(sphere);
     vs_volume_release(ml);
