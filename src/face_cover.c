@@ -64,6 +64,15 @@ static void interior_run(const double i0[3], const double di[3], const int *in0,
     if (*b < *a) *a = *b = x0;
 }
 
+/* Depths across a slab at which the share is averaged (the sheet holds the
+ * kernels integrated over its slab): its middle alone up to a slab of one
+ * voxel (closer to the ray caster there: tubes through 48^3 tissue under
+ * --iso 50:100, 128^2, 31.9 dB against 31.3 with three depths), else the
+ * midpoint rule
+ * with two depths a voxel of slab and one more, at most FACE_DEPTHS (slab
+ * 2: 13.0 dB with the middle alone, the faces drawn as stripes; 26.6 dB). */
+#define FACE_DEPTHS 16
+
 void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, int ch, int gs)
 {
     const vs_frame *F = t->F;
@@ -71,6 +80,8 @@ void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, in
     const struct vs_volume *vol = F->vol, *cv = F->cover;
     const int *in0 = F->cover_in0, *in1 = F->cover_in1;
     const double R = F->s->kernel_radius, slab = F->fp.slab, z = (k + 0.5) * slab;
+    const double nq = slab <= 1.0 ? 1.0 : fmin(FACE_DEPTHS, ceil(2.0 * slab) + 1.0);
+    const int n = (int)nq;
     /* d(cover index) / d(splatted index), and the kernel's reach, per axis */
     double sc[3], reach[3];
     for (int a = 0; a < 3; a++) {
@@ -80,31 +91,50 @@ void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, in
     const int x0 = bb->x0 > 0 ? bb->x0 : 0, x1 = bb->x1 < t->bw ? bb->x1 : t->bw;
     const int y0 = bb->y0 > 0 ? bb->y0 : 0, y1 = bb->y1 < t->bh ? bb->y1 : t->bh;
     for (int y = y0; y < y1; y++) {
-        /* a sheet point's index is affine in x along a row (perspective
-         * too: the sheet's scale is one number) */
-        double i0[3], i1[3], di[3];
-        const double v0[3] = {t->ox, y + t->oy, z}, v1[3] = {t->ox + 1.0, y + t->oy, z};
-        vs_camera_view_to_index(cam, v0, i0);
-        vs_camera_view_to_index(cam, v1, i1);
-        for (int a = 0; a < 3; a++) {
-            di[a] = (i1[a] - i0[a]) * sc[a];
-            i0[a] = cv == vol ? i0[a] : vs_volume_index_in(vol, cv, a, i0[a]);
+        /* a point's index is affine in x along a row at each depth
+         * (perspective too: a depth's scale is one number) */
+        double i0[FACE_DEPTHS][3], di[FACE_DEPTHS][3];
+        int ra = x0, rb = x1;
+        for (int q = 0; q < n; q++) {
+            const double zq = z + slab * ((q + 0.5) / n - 0.5);
+            double i1[3];
+            const double v0[3] = {t->ox, y + t->oy, zq}, v1[3] = {t->ox + 1.0, y + t->oy, zq};
+            vs_camera_view_to_index(cam, v0, i0[q]);
+            vs_camera_view_to_index(cam, v1, i1);
+            for (int a = 0; a < 3; a++) {
+                di[q][a] = (i1[a] - i0[q][a]) * sc[a];
+                i0[q][a] = cv == vol ? i0[q][a] : vs_volume_index_in(vol, cv, a, i0[q][a]);
+            }
+            int qa, qb; /* the pixels inside at every depth are skipped */
+            interior_run(i0[q], di[q], in0, in1, reach, x0, x1, &qa, &qb);
+            ra = qa > ra ? qa : ra;
+            rb = qb < rb ? qb : rb;
         }
-        int ra, rb;
-        interior_run(i0, di, in0, in1, reach, x0, x1, &ra, &rb);
+        if (rb <= ra) ra = rb = x1;
         for (int x = x0; x < x1; x++) {
-            if (x == ra && rb > ra) x = rb;
+            if (x >= ra && x < rb) x = rb;
             if (x >= x1) break;
             /* nothing splatted here (no relevant voxel reaches): nothing to divide */
             float *p = buf + ((size_t)y * t->stride + x) * ch;
             int any = 0;
             for (int i = 0; i < ch; i++) any |= p[i] != 0.0f;
             if (!any) continue;
-            double c[3], dc[3], C = 1.0;
-            for (int a = 0; a < 3; a++) {
-                c[a] = face_share(i0[a] + x * di[a], in0[a], in1[a], R, F->cover_scale[a], gs ? &dc[a] : NULL);
-                C *= c[a];
+            /* the share averaged over the slab, and its view-space gradient */
+            double C = 0.0, dC[3] = {0.0, 0.0, 0.0};
+            for (int q = 0; q < n; q++) {
+                double c[3], dc[3], Cq = 1.0;
+                for (int a = 0; a < 3; a++) {
+                    c[a] = face_share(i0[q][a] + x * di[q][a], in0[a], in1[a], R, F->cover_scale[a], gs ? &dc[a] : NULL);
+                    Cq *= c[a];
+                }
+                C += Cq;
+                if (!gs) continue;
+                for (int a = 0; a < 3; a++) {
+                    const double dCa = dc[a] * c[(a + 1) % 3] * c[(a + 2) % 3] * sc[a];
+                    for (int j = 0; j < 3; j++) dC[j] += dCa * cam->Minv[a][j];
+                }
             }
+            C /= nq;
             /* inside, or so far out that nothing reaches (clipped anyway) */
             if (C >= 1.0 || C < 1e-3) continue;
             const double inv = 1.0 / C;
@@ -113,15 +143,12 @@ void vs_face_norm_sheet(const tile_ctx *t, int k, float *buf, const rect *bb, in
                 continue;
             }
             /* (S / C)' = (S' - (S / C) C') / C, C' in view units (x, y per
-             * pixel, z per view unit) as the splatted gradient's */
+             * pixel, z per view unit) as the splatted gradient's; S and S'
+             * are both integrals over the slab, so S / C carries its length
+             * and C' is not scaled by it */
             const double S = p[0] * inv;
-            double g[3] = {0.0, 0.0, 0.0};
-            for (int a = 0; a < 3; a++) {
-                const double dCa = dc[a] * c[(a + 1) % 3] * c[(a + 2) % 3] * sc[a];
-                for (int j = 0; j < 3; j++) g[j] += dCa * cam->Minv[a][j];
-            }
             p[0] = (float)S;
-            for (int j = 0; j < 3; j++) p[1 + j] = (float)((p[1 + j] - S * slab * g[j]) * inv);
+            for (int j = 0; j < 3; j++) p[1 + j] = (float)((p[1 + j] - S * dC[j] / nq) * inv);
         }
     }
 }
