@@ -72,6 +72,32 @@ static inline double vs_camera_near_cut(const vs_camera *cam, double R, double s
     const double rz = R * sqrt(cam->M[2][0] * cam->M[2][0] + cam->M[2][1] * cam->M[2][1] + cam->M[2][2] * cam->M[2][2]);
     return (ceil((cam->near_z + 2.0 * rz) / slab) + 2.0) * slab;
 }
+/* Along an image row whose points' index is i0 + x di (x in pixels), the
+ * real x interval [*xlo, *xhi] where lo[a] <= index[a] <= hi[a] on every
+ * axis; empty when *xhi < *xlo (an axis the row runs along keeps all or
+ * nothing, by i0).  Its ends may be infinite or far off: clamp them before
+ * converting to int. */
+static inline void vs_camera_row_within(const double i0[3], const double di[3], const double lo[3], const double hi[3],
+                                        double *xlo, double *xhi)
+{
+    double x0 = -INFINITY, x1 = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (di[a] == 0.0) {
+            if (!(i0[a] >= lo[a] && i0[a] <= hi[a])) x1 = -INFINITY;
+            continue;
+        }
+        double xa = (lo[a] - i0[a]) / di[a], xb = (hi[a] - i0[a]) / di[a];
+        if (xa > xb) {
+            const double sw = xa;
+            xa = xb;
+            xb = sw;
+        }
+        if (xa > x0) x0 = xa;
+        if (xb < x1) x1 = xb;
+    }
+    *xlo = x0;
+    *xhi = x1;
+}
 /* The image box (x0, x1, y0, y1) covered by points whose depth-0 position
  * lies in [xo0, xo1] x [yo0, yo1] at depths in [z0, z1] (z0 >= near_z). */
 static inline void vs_camera_depth_box(const vs_camera *cam, double xo0, double xo1, double yo0, double yo1,

@@ -237,7 +237,7 @@ static void cast_ray(const rc_job *J, int px, int py, double acc[4])
     /* opacity per step: the ray's length per unit of depth */
     const double step_len = J->step * vs_camera_ray_length(cam, px, py);
     /* clip the ray against the sample box (slab test), in view-z units */
-    double t0 = fmax(cam->near_z, vs_camera_near_cut(cam, J->R, s->slab)), t1 = INFINITY;
+    double t0 = J->t_near, t1 = INFINITY;
     int entry_axis = -1;
     for (int a = 0; a < 3; a++) {
         double d = dir[a];
@@ -441,6 +441,7 @@ vs_status vs_raycast_render(vs_context *ctx, const struct vs_volume *vol, const 
     J->R = s->kernel_radius;
     J->R2 = J->R * J->R;
     J->b = vs_kernel_b(J->R);
+    J->t_near = fmax(J->cam.near_z, vs_camera_near_cut(&J->cam, J->R, s->slab));
     J->step = s->ray_step;
     J->refine = J->mode == MODE_ANALYTIC && !cls->use_points;
     for (int a = 0; a < 3; a++) {

@@ -26,10 +26,11 @@ typedef struct rc_job {
     int mode;
     int normalize;         /* Gaussian: weights over their lattice sum     */
     int faces;             /* the faces would show (vs_classify_faces,
-                              face_cover.h): samples
-                              inside the volume's faces, reconstructed from
-                              the voxels that reach alone                   */
+                              face_cover.h): samples inside the volume's
+                              faces, reconstructed from the voxels that
+                              reach alone                                   */
     double R, R2, b;       /* kernel radius, its square, normalization      */
+    double t_near;         /* depth rays start at (vs_camera_near_cut)      */
     double base;           /* sampled volumes: values are reconstructed less
                               this (the volume's minimum), as splatting does,
                               so that outside the volume reads as the minimum */

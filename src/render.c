@@ -363,17 +363,19 @@ vs_status vs_render_splat(vs_context *ctx, const struct vs_volume *vol, const st
      * inside them (face_cover.h); the cubic copy and its levels reach past
      * the faces (their voxels there hold the fall-off), so the volume's own
      * grid's, with the kernel as wide as the splatted grid's voxels */
+    double lo_faces[3], hi_faces[3];
     int past = 0;
-    for (int a = 0; a < 3; a++)
-        past |= vs_volume_index_in(full, vol, a, -0.5) > 0.0 ||
-                vs_volume_index_in(full, vol, a, full->dims[a] - 0.5) < vol->dims[a] - 1;
+    for (int a = 0; a < 3; a++) {
+        /* the full volume's faces (index -0.5 and dims - 0.5) in the
+         * splatted volume's index (a level or the cubic copy) */
+        lo_faces[a] = vs_volume_index_in(full, vol, a, -0.5);
+        hi_faces[a] = vs_volume_index_in(full, vol, a, full->dims[a] - 0.5);
+        past |= lo_faces[a] > 0.0 || hi_faces[a] < vol->dims[a] - 1;
+    }
     F.cover = faces ? (past ? full : vol) : NULL;
     for (int a = 0; a < 3; a++) {
         const int cut_lo = s->has_crop && s->crop_lo[a] > 0, cut_hi = s->has_crop && s->crop_hi[a] < vol->dims[a];
-        /* the full volume's faces (index -0.5 and dims - 0.5) in the
-         * splatted volume's index (a level or the cubic copy) */
-        const double lo_face = vs_volume_index_in(full, vol, a, -0.5);
-        const double hi_face = vs_volume_index_in(full, vol, a, full->dims[a] - 0.5);
+        const double lo_face = lo_faces[a], hi_face = hi_faces[a];
         F.clip_lo[a] = cut_lo ? s->crop_lo[a] - 0.5 : faces ? lo_face : -INFINITY;
         F.clip_hi[a] = cut_hi ? s->crop_hi[a] - 0.5 : faces ? hi_face : INFINITY;
         F.clip_hi_open[a] = cut_hi;

@@ -28,6 +28,13 @@ static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
     const vs_frame *F = t->F;
     const vs_camera *cam = &F->cam;
     const double z = (k + 0.5) * F->fp.slab;
+    /* the bounds a hair inside: a row running along one is tested point by
+     * point */
+    double b0[3], b1[3];
+    for (int a = 0; a < 3; a++) {
+        b0[a] = F->clip_lo[a] + 1e-6;
+        b1[a] = F->clip_hi[a] - 1e-6;
+    }
     for (int y = r->y0; y < r->y1; y++) {
         if (r->xa[y] >= r->xb[y]) continue;
         /* A sheet point's index is affine in x along a row (perspective
@@ -39,22 +46,9 @@ static void clip_outside(const tile_ctx *t, int k, const spans *r, float *alpha)
         const double v0[3] = {t->ox, y + t->oy, z}, v1[3] = {t->ox + 1.0, y + t->oy, z};
         vs_camera_view_to_index(cam, v0, i0);
         vs_camera_view_to_index(cam, v1, i1);
-        double lo = -INFINITY, hi = INFINITY; /* x where every bound holds */
-        for (int a = 0; a < 3; a++) {
-            const double di = i1[a] - i0[a];
-            if (di == 0.0) { /* near or past a bound: every pixel tested */
-                if (!(i0[a] > F->clip_lo[a] + 1e-6 && i0[a] < F->clip_hi[a] - 1e-6)) hi = -INFINITY;
-                continue;
-            }
-            double xa = (F->clip_lo[a] - i0[a]) / di, xb = (F->clip_hi[a] - i0[a]) / di;
-            if (xa > xb) {
-                const double sw = xa;
-                xa = xb;
-                xb = sw;
-            }
-            lo = xa > lo ? xa : lo; /* no NaN: the bounds are finite or infinite, di finite */
-            hi = xb < hi ? xb : hi;
-        }
+        double di[3], lo, hi; /* x where every bound holds */
+        for (int a = 0; a < 3; a++) di[a] = i1[a] - i0[a];
+        vs_camera_row_within(i0, di, b0, b1, &lo, &hi);
         /* clamped before converting (a near-parallel axis puts them far
          * off); [ra, rb): two pixels or more inside every crossing */
         lo = lo < r->xa[y] - 3 ? r->xa[y] - 3 : lo > r->xb[y] ? r->xb[y] : lo;
